@@ -1,0 +1,153 @@
+//! Contact laws as slots.
+//!
+//! A contact is evaluated by a fixed pipeline, as in LAMMPS's granular sub-models:
+//!
+//! 1. **normal**: elastic normal force and stiffness from the overlap (`hertz`, `jkr`);
+//! 2. **damping**: a viscous coefficient from a stiffness (`restitution`), applied to the
+//!    normal and the tangential relative velocities;
+//! 3. **tangential**: friction with history and a Coulomb cap (`mindlin`, ...);
+//! 4. **rolling**: rolling-resistance torques (`cdt`, `epsd`);
+//! 5. **extras**: any number of additive normal forces, which may act across a gap
+//!    (`capillary`).
+//!
+//! Laws never call each other; the pipeline hands each the outputs it needs. Each law is one
+//! file in [`laws`] and one line in its registry. Compatibility is checked once, in
+//! [`ContactModel::build`], never inside the time step.
+//!
+//! Sign conventions: the unit normal `n` points from particle i to particle j (or the wall);
+//! the overlap `delta_n > 0` in contact; normal forces returned by laws are positive when
+//! repulsive; vectors returned are forces and torques *on i* unless stated.
+
+pub mod geometry;
+pub mod laws;
+pub mod model;
+
+pub use geometry::Contact;
+pub use model::{ContactModel, ContactOut, ModelSpec, PairSpec};
+
+use crate::material::Material;
+use crate::param::{ParamSpec, Params};
+use glam::DVec3;
+
+/// Output of a normal law.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct NormalForce {
+    /// Elastic (and adhesive) normal force, N; positive pushes the particles apart.
+    pub elastic: f64,
+    /// Normal contact stiffness dF/d(delta), N/m, used by damping and rolling laws.
+    pub stiffness: f64,
+    /// The repulsive part that loads friction (EDEM: the Hertz part of JKR), N.
+    pub friction_load: f64,
+    /// Radius of the contact area, m (sqrt(R* delta) for Hertz).
+    pub contact_radius: f64,
+}
+
+/// Slot 1: the elastic normal force.
+pub trait NormalLaw: Send + Sync {
+    fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce;
+    /// How far beyond touching (m, >= 0) an established contact keeps acting, for contact
+    /// radius `r_eff`. Neighbour lists keep such pairs.
+    fn reach(&self, _r_eff: f64) -> f64 {
+        0.0
+    }
+}
+
+/// Slot 2: a viscous damping coefficient (N s/m) for a spring of `stiffness` acting on `m_eff`.
+pub trait DampingLaw: Send + Sync {
+    fn coefficient(&self, stiffness: f64, m_eff: f64) -> f64;
+}
+
+/// Slot 3: tangential (friction) force.
+pub trait TangentialLaw: Send + Sync {
+    /// Current tangential stiffness (N/m); the pipeline turns it into a damping coefficient.
+    fn stiffness(&self, c: &Contact, normal: &NormalForce) -> f64;
+    /// Tangential force on i. `coulomb_load` is |friction load + normal damping| (N),
+    /// `damping` the tangential damping coefficient (N s/m).
+    fn force(
+        &self,
+        c: &Contact,
+        coulomb_load: f64,
+        stiffness: f64,
+        damping: f64,
+        history: &mut [f64],
+    ) -> DVec3;
+}
+
+/// Slot 4: rolling resistance. Returns the torques on i and on j (N m).
+pub trait RollingLaw: Send + Sync {
+    fn torques(
+        &self,
+        c: &Contact,
+        normal: &NormalForce,
+        coulomb_load: f64,
+        history: &mut [f64],
+    ) -> (DVec3, DVec3);
+}
+
+/// Slot 5: an additive normal force (N, positive repulsive), possibly acting across a gap.
+pub trait ExtraLaw: Send + Sync {
+    fn force(&self, c: &Contact, history: &mut [f64]) -> f64;
+    /// How far beyond touching (m, >= 0) the effect acts for contact radius `r_eff`.
+    fn reach(&self, _r_eff: f64) -> f64 {
+        0.0
+    }
+}
+
+/// Which slot a law fills.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Slot {
+    Normal,
+    Damping,
+    Tangential,
+    Rolling,
+    Extra,
+}
+
+impl Slot {
+    pub fn name(self) -> &'static str {
+        match self {
+            Slot::Normal => "normal",
+            Slot::Damping => "damping",
+            Slot::Tangential => "tangential",
+            Slot::Rolling => "rolling",
+            Slot::Extra => "extra",
+        }
+    }
+}
+
+/// A constructed law for one material pair.
+pub enum BuiltLaw {
+    Normal(Box<dyn NormalLaw>),
+    Damping(Box<dyn DampingLaw>),
+    Tangential(Box<dyn TangentialLaw>),
+    Rolling(Box<dyn RollingLaw>),
+    Extra(Box<dyn ExtraLaw>),
+}
+
+/// What a law's constructor gets: the two materials, their effective moduli and the
+/// validated pair parameters.
+pub struct LawInput<'a> {
+    pub material_i: &'a Material,
+    pub material_j: &'a Material,
+    /// E*, Pa.
+    pub e_eff: f64,
+    /// G*, Pa.
+    pub g_eff: f64,
+    pub params: Params<'a>,
+}
+
+/// A registry row: everything the builder needs to know about a law without running it.
+pub struct LawEntry {
+    pub name: &'static str,
+    pub slot: Slot,
+    pub summary: &'static str,
+    /// Per-pair parameters (e.g. `restitution`), with units and ranges.
+    pub params: &'static [ParamSpec],
+    /// Names of the per-contact history values (f64) the law keeps.
+    pub history: &'static [&'static str],
+    /// The law pulls particles together (an adhesive normal law or extra force).
+    pub cohesive: bool,
+    /// A tangential or rolling law that stays correct when the normal force is adhesive.
+    pub allows_cohesion: bool,
+    pub build: fn(&LawInput) -> BuiltLaw,
+}

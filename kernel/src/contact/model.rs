@@ -1,0 +1,395 @@
+//! The contact model: which law fills each slot, the coefficients of every material pair,
+//! and the per-contact history layout. Built (and checked) once; evaluated every step.
+
+use super::laws::REGISTRY;
+use super::{
+    BuiltLaw, Contact, DampingLaw, ExtraLaw, LawEntry, LawInput, NormalLaw, RollingLaw, Slot,
+    TangentialLaw,
+};
+use crate::error::{KernelError, Result};
+use crate::material::{Material, effective_shear, effective_youngs};
+use crate::param::{self, Params};
+use glam::DVec3;
+use std::collections::BTreeMap;
+use std::ops::Range;
+
+/// Which law fills each slot (names from the registry). `damping`, `tangential` and
+/// `rolling` may be left empty (no damping, frictionless, no rolling resistance).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModelSpec {
+    pub normal: String,
+    pub damping: Option<String>,
+    pub tangential: Option<String>,
+    pub rolling: Option<String>,
+    pub extra: Vec<String>,
+}
+
+/// Coefficients of one material pair (order does not matter).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PairSpec {
+    pub materials: (String, String),
+    pub params: BTreeMap<String, f64>,
+}
+
+/// Forces and torques of one contact.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ContactOut {
+    /// Force on i (j gets the opposite), N.
+    pub force: DVec3,
+    /// Torque on i and on j, N m.
+    pub torque_i: DVec3,
+    pub torque_j: DVec3,
+}
+
+/// The laws of one material pair.
+struct PairLaws {
+    normal: Box<dyn NormalLaw>,
+    damping: Option<Box<dyn DampingLaw>>,
+    tangential: Option<Box<dyn TangentialLaw>>,
+    rolling: Option<Box<dyn RollingLaw>>,
+    extras: Vec<Box<dyn ExtraLaw>>,
+}
+
+/// Where each law's history lives inside a contact's history row. Slot 0 is the
+/// "contact established" flag that gives cohesive laws their hysteresis.
+#[derive(Debug, Clone, Default)]
+struct HistoryLayout {
+    normal: Range<usize>,
+    tangential: Range<usize>,
+    rolling: Range<usize>,
+    extras: Vec<Range<usize>>,
+    stride: usize,
+}
+
+/// Index 0 of every history row: 1.0 while a contact is established.
+pub const ACTIVE: usize = 0;
+
+pub struct ContactModel {
+    materials: Vec<Material>,
+    /// `pairs[a * n + b]`, symmetric; `None` where no coefficients were given.
+    pairs: Vec<Option<PairLaws>>,
+    layout: HistoryLayout,
+    law_names: Vec<&'static str>,
+    has_reach: bool,
+}
+
+fn lookup(slot: Slot, name: &str) -> Result<&'static LawEntry> {
+    REGISTRY
+        .iter()
+        .copied()
+        .find(|e| e.slot == slot && e.name == name)
+        .ok_or_else(|| {
+            let known: Vec<&str> = REGISTRY
+                .iter()
+                .filter(|e| e.slot == slot)
+                .map(|e| e.name)
+                .collect();
+            KernelError::UnknownLaw {
+                slot: slot.name().into(),
+                name: name.into(),
+                known: known.join(", "),
+            }
+        })
+}
+
+/// Constructs one pair's laws; the entries come normal first, as `build` orders them.
+fn construct(entries: &[&'static LawEntry], input: &LawInput) -> PairLaws {
+    let mut built = entries.iter().map(|e| (e.build)(input));
+    let Some(BuiltLaw::Normal(normal)) = built.next() else {
+        unreachable!("the first entry is the normal law")
+    };
+    let mut laws = PairLaws {
+        normal,
+        damping: None,
+        tangential: None,
+        rolling: None,
+        extras: vec![],
+    };
+    for b in built {
+        match b {
+            BuiltLaw::Damping(l) => laws.damping = Some(l),
+            BuiltLaw::Tangential(l) => laws.tangential = Some(l),
+            BuiltLaw::Rolling(l) => laws.rolling = Some(l),
+            BuiltLaw::Extra(l) => laws.extras.push(l),
+            BuiltLaw::Normal(_) => unreachable!("only one normal law"),
+        }
+    }
+    laws
+}
+
+impl ContactModel {
+    /// Checks the law set and every pair's coefficients, then constructs the laws.
+    pub fn build(
+        materials: &[Material],
+        spec: &ModelSpec,
+        pairs: &[PairSpec],
+    ) -> Result<ContactModel> {
+        for m in materials {
+            m.validate()?;
+        }
+        let mut entries: Vec<&'static LawEntry> = vec![lookup(Slot::Normal, &spec.normal)?];
+        if let Some(d) = &spec.damping {
+            entries.push(lookup(Slot::Damping, d)?);
+        }
+        let tangential = spec
+            .tangential
+            .as_deref()
+            .map(|t| lookup(Slot::Tangential, t))
+            .transpose()?;
+        let rolling = spec
+            .rolling
+            .as_deref()
+            .map(|r| lookup(Slot::Rolling, r))
+            .transpose()?;
+        entries.extend(tangential);
+        entries.extend(rolling);
+        for x in &spec.extra {
+            let e = lookup(Slot::Extra, x)?;
+            if entries.iter().any(|o| o.name == e.name) {
+                return Err(KernelError::Invalid(format!(
+                    "extra law '{x}' is listed twice"
+                )));
+            }
+            entries.push(e);
+        }
+
+        // Compatibility, once: an adhesive force needs friction and rolling laws that cap on
+        // the repulsive load rather than on a possibly negative net normal force.
+        if let Some(cohesive) = entries.iter().find(|e| e.cohesive) {
+            for e in entries
+                .iter()
+                .filter(|e| matches!(e.slot, Slot::Tangential | Slot::Rolling))
+            {
+                if !e.allows_cohesion {
+                    return Err(KernelError::Invalid(format!(
+                        "{} law '{}' cannot be combined with the cohesive law '{}': it caps friction on the net normal force, which adhesion makes negative; choose a {} law that allows cohesion ({})",
+                        e.slot.name(),
+                        e.name,
+                        cohesive.name,
+                        e.slot.name(),
+                        REGISTRY
+                            .iter()
+                            .filter(|o| o.slot == e.slot && o.allows_cohesion)
+                            .map(|o| o.name)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )));
+                }
+            }
+        }
+
+        let layout = {
+            let mut at = 1;
+            let mut take = |n: usize| {
+                let r = at..at + n;
+                at += n;
+                r
+            };
+            let normal = take(entries[0].history.len());
+            let tangential = take(tangential.map_or(0, |e| e.history.len()));
+            let rolling = take(rolling.map_or(0, |e| e.history.len()));
+            let extras = spec
+                .extra
+                .iter()
+                .map(|x| take(lookup(Slot::Extra, x).unwrap().history.len()))
+                .collect();
+            HistoryLayout {
+                normal,
+                tangential,
+                rolling,
+                extras,
+                stride: at,
+            }
+        };
+
+        let specs: Vec<(&'static str, param::ParamSpec)> = entries
+            .iter()
+            .flat_map(|e| e.params.iter().map(move |p| (e.name, *p)))
+            .collect();
+        let n = materials.len();
+        let mut table: Vec<Option<PairLaws>> = (0..n * n).map(|_| None).collect();
+        for p in pairs {
+            let find = |name: &str| {
+                materials.iter().position(|m| m.name == name).ok_or_else(|| {
+                    KernelError::Invalid(format!(
+                        "pair ({}, {}) names material '{name}', which is not defined; defined: {}",
+                        p.materials.0,
+                        p.materials.1,
+                        materials.iter().map(|m| m.name.as_str()).collect::<Vec<_>>().join(", ")
+                    ))
+                })
+            };
+            let (a, b) = (find(&p.materials.0)?, find(&p.materials.1)?);
+            let context = format!("pairs[{}-{}]", p.materials.0, p.materials.1);
+            if table[a * n + b].is_some() {
+                return Err(KernelError::Invalid(format!("{context} is given twice")));
+            }
+            param::validate(&context, &p.params, &specs)?;
+            let input = LawInput {
+                material_i: &materials[a],
+                material_j: &materials[b],
+                e_eff: effective_youngs(&materials[a], &materials[b]),
+                g_eff: effective_shear(&materials[a], &materials[b]),
+                params: Params::new(&p.params),
+            };
+            table[a * n + b] = Some(construct(&entries, &input));
+            if a != b {
+                table[b * n + a] = Some(construct(&entries, &input));
+            }
+        }
+        let has_reach = entries.iter().any(|e| e.cohesive);
+        Ok(ContactModel {
+            materials: materials.to_vec(),
+            pairs: table,
+            layout,
+            law_names: entries.iter().map(|e| e.name).collect(),
+            has_reach,
+        })
+    }
+
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    pub fn material_index(&self, name: &str) -> Option<usize> {
+        self.materials.iter().position(|m| m.name == name)
+    }
+
+    /// Names of the laws in use, in slot order.
+    pub fn law_names(&self) -> &[&'static str] {
+        &self.law_names
+    }
+
+    /// Number of f64 values per contact history row.
+    pub fn history_stride(&self) -> usize {
+        self.layout.stride
+    }
+
+    /// Whether coefficients exist for materials a and b.
+    pub fn has_pair(&self, a: usize, b: usize) -> bool {
+        self.pairs
+            .get(a * self.materials.len() + b)
+            .is_some_and(|p| p.is_some())
+    }
+
+    /// Checks that every pair among `needed` has coefficients.
+    pub fn require_pairs(&self, needed: &[(usize, usize)]) -> Result<()> {
+        for &(a, b) in needed {
+            if !self.has_pair(a, b) {
+                return Err(KernelError::Invalid(format!(
+                    "no contact coefficients for the material pair ({}, {}); add a [[pairs]] entry with materials = [\"{}\", \"{}\"]",
+                    self.materials[a].name,
+                    self.materials[b].name,
+                    self.materials[a].name,
+                    self.materials[b].name
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The largest distance beyond touching (m) at which any established contact between
+    /// materials a and b with contact radius up to `r_eff_max` still acts.
+    pub fn reach(&self, a: usize, b: usize, r_eff_max: f64) -> f64 {
+        match &self.pairs[a * self.materials.len() + b] {
+            Some(l) if self.has_reach || !l.extras.is_empty() => {
+                let mut r = l.normal.reach(r_eff_max);
+                for x in &l.extras {
+                    r = r.max(x.reach(r_eff_max));
+                }
+                r
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Largest reach over all pairs.
+    pub fn max_reach(&self, r_eff_max: f64) -> f64 {
+        let n = self.materials.len();
+        let mut r: f64 = 0.0;
+        for a in 0..n {
+            for b in 0..n {
+                if self.has_pair(a, b) {
+                    r = r.max(self.reach(a, b, r_eff_max));
+                }
+            }
+        }
+        r
+    }
+
+    /// Evaluates one contact between materials a and b. Returns `None` (and clears the
+    /// history row) when there is no force: not touching and not established, or separated
+    /// beyond the laws' reach.
+    #[inline]
+    pub fn evaluate(
+        &self,
+        a: usize,
+        b: usize,
+        c: &Contact,
+        history: &mut [f64],
+    ) -> Option<ContactOut> {
+        let laws = self.pairs[a * self.materials.len() + b].as_ref()?;
+        if history[ACTIVE] == 0.0 {
+            if c.overlap <= 0.0 {
+                return None;
+            }
+            history[ACTIVE] = 1.0;
+        } else if c.overlap <= 0.0 && c.overlap <= -self.reach_of(laws, c.r_eff) {
+            history.fill(0.0);
+            return None;
+        }
+        let l = &self.layout;
+        let normal = laws.normal.force(c, &mut history[l.normal.clone()]);
+        let damp_n = match &laws.damping {
+            Some(d) if c.overlap > 0.0 => d.coefficient(normal.stiffness, c.m_eff) * c.v_n,
+            _ => 0.0,
+        };
+        let coulomb_load = (normal.friction_load + damp_n).abs();
+        let mut f_normal = normal.elastic + damp_n;
+        let mut tangential = DVec3::ZERO;
+        if let Some(t) = &laws.tangential {
+            let s_t = t.stiffness(c, &normal);
+            let eta_t = match &laws.damping {
+                Some(d) if c.overlap > 0.0 => d.coefficient(s_t, c.m_eff),
+                _ => 0.0,
+            };
+            tangential = t.force(
+                c,
+                coulomb_load,
+                s_t,
+                eta_t,
+                &mut history[l.tangential.clone()],
+            );
+        }
+        let (mut torque_i, mut torque_j) = (DVec3::ZERO, DVec3::ZERO);
+        if let Some(r) = &laws.rolling {
+            (torque_i, torque_j) =
+                r.torques(c, &normal, coulomb_load, &mut history[l.rolling.clone()]);
+        }
+        for (x, range) in laws.extras.iter().zip(&l.extras) {
+            f_normal += x.force(c, &mut history[range.clone()]);
+        }
+        let n = c.normal;
+        torque_i += (n * c.arm_i).cross(tangential);
+        if c.arm_j.is_finite() {
+            torque_j += (n * c.arm_j).cross(tangential);
+        }
+        Some(ContactOut {
+            force: tangential - n * f_normal,
+            torque_i,
+            torque_j,
+        })
+    }
+
+    #[inline]
+    fn reach_of(&self, laws: &PairLaws, r_eff: f64) -> f64 {
+        if !self.has_reach && laws.extras.is_empty() {
+            return 0.0;
+        }
+        let mut r = laws.normal.reach(r_eff);
+        for x in &laws.extras {
+            r = r.max(x.reach(r_eff));
+        }
+        r
+    }
+}

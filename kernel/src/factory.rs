@@ -1,0 +1,265 @@
+//! Dynamic particle generation (EDEM "dynamic factory").
+//!
+//! A factory creates particles inside a region at a rate (particles/s) up to a total, at
+//! random positions that overlap neither existing particles nor each other, with radii from
+//! a discrete size distribution given by number or by mass fraction. All randomness comes
+//! from one seeded generator (ChaCha8), so a seed fixes the whole run.
+
+use crate::error::{KernelError, Result};
+use crate::particles::Particles;
+use glam::DVec3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Where particles are created. The whole sphere lies inside the region.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Region {
+    Box {
+        min: DVec3,
+        max: DVec3,
+    },
+    /// Vertical cylinder: base centre, radius, height (m).
+    Cylinder {
+        base: DVec3,
+        radius: f64,
+        height: f64,
+    },
+}
+
+/// Whether size fractions count particles or mass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Basis {
+    Number,
+    Mass,
+}
+
+#[derive(Debug, Clone)]
+pub struct FactorySpec {
+    pub region: Region,
+    /// (radius m, fraction) pairs; fractions are normalised.
+    pub sizes: Vec<(f64, f64)>,
+    pub basis: Basis,
+    pub material: u16,
+    pub density: f64,
+    /// Particles per second; `f64::INFINITY` creates all at once.
+    pub rate: f64,
+    pub count: usize,
+    pub velocity: DVec3,
+    pub start_time: f64,
+    pub seed: u64,
+}
+
+#[derive(Debug, Clone)]
+pub struct Factory {
+    pub spec: FactorySpec,
+    /// Cumulative number probabilities of the size classes.
+    cumulative: Vec<f64>,
+    rng: ChaCha8Rng,
+    pub inserted: usize,
+    /// Times a position was rejected for overlap (a crowded region shows here).
+    pub rejections: u64,
+}
+
+/// Random placement attempts per particle per call before it is deferred to a later step.
+const ATTEMPTS: usize = 200;
+
+impl Factory {
+    pub fn new(spec: FactorySpec) -> Result<Factory> {
+        if spec.sizes.is_empty() {
+            return Err(KernelError::Invalid(
+                "factory: 'sizes' is empty; give at least one size class".into(),
+            ));
+        }
+        for (k, &(r, w)) in spec.sizes.iter().enumerate() {
+            if !(r > 0.0 && r.is_finite()) {
+                return Err(KernelError::OutOfRange {
+                    key: format!("factory.sizes[{k}].radius"),
+                    value: r,
+                    range: "(0, inf)".into(),
+                    unit: "m".into(),
+                });
+            }
+            if !(w >= 0.0 && w.is_finite()) {
+                return Err(KernelError::OutOfRange {
+                    key: format!("factory.sizes[{k}].fraction"),
+                    value: w,
+                    range: "[0, inf)".into(),
+                    unit: "-".into(),
+                });
+            }
+        }
+        if !(spec.rate > 0.0) {
+            return Err(KernelError::OutOfRange {
+                key: "factory.rate".into(),
+                value: spec.rate,
+                range: "(0, inf]".into(),
+                unit: "1/s".into(),
+            });
+        }
+        // Mass fractions -> number weights: w_k / m_k, m_k ~ r_k^3 at one density.
+        let weights: Vec<f64> = spec
+            .sizes
+            .iter()
+            .map(|&(r, w)| {
+                if spec.basis == Basis::Mass {
+                    w / r.powi(3)
+                } else {
+                    w
+                }
+            })
+            .collect();
+        let total: f64 = weights.iter().sum();
+        if !(total > 0.0) {
+            return Err(KernelError::Invalid(
+                "factory: size fractions sum to zero".into(),
+            ));
+        }
+        let mut acc = 0.0;
+        let cumulative = weights
+            .iter()
+            .map(|w| {
+                acc += w / total;
+                acc
+            })
+            .collect();
+        let r_max = spec.sizes.iter().map(|s| s.0).fold(0.0, f64::max);
+        let fits = match spec.region {
+            Region::Box { min, max } => (max - min).min_element() > 2.0 * r_max,
+            Region::Cylinder { radius, height, .. } => radius > r_max && height > 2.0 * r_max,
+        };
+        if !fits {
+            return Err(KernelError::Invalid(format!(
+                "factory region is too small for particles of radius {r_max} m"
+            )));
+        }
+        let rng = ChaCha8Rng::seed_from_u64(spec.seed);
+        Ok(Factory {
+            spec,
+            cumulative,
+            rng,
+            inserted: 0,
+            rejections: 0,
+        })
+    }
+
+    pub fn max_radius(&self) -> f64 {
+        self.spec.sizes.iter().map(|s| s.0).fold(0.0, f64::max)
+    }
+
+    pub fn min_radius(&self) -> f64 {
+        self.spec
+            .sizes
+            .iter()
+            .map(|s| s.0)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    pub fn done(&self) -> bool {
+        self.inserted >= self.spec.count
+    }
+
+    /// How many particles should exist by time `t`.
+    fn due(&self, t: f64) -> usize {
+        if t < self.spec.start_time {
+            return 0;
+        }
+        let n = ((t - self.spec.start_time) * self.spec.rate).floor();
+        if n.is_finite() {
+            (n as usize).min(self.spec.count)
+        } else {
+            self.spec.count
+        }
+    }
+
+    /// Creates the particles due by time `t`; returns how many were created.
+    pub fn insert(&mut self, t: f64, particles: &mut Particles) -> usize {
+        let due = self.due(t);
+        if due <= self.inserted {
+            return 0;
+        }
+        let r_max = self.max_radius();
+        let (lo, hi) = self.bounds();
+        // Existing particles that could touch the region.
+        let mut near: Vec<(DVec3, f64)> = (0..particles.len())
+            .filter(|&i| {
+                let p = particles.position[i];
+                let m = particles.radius[i] + r_max;
+                p.cmpge(lo - DVec3::splat(m)).all() && p.cmple(hi + DVec3::splat(m)).all()
+            })
+            .map(|i| (particles.position[i], particles.radius[i]))
+            .collect();
+        let mut made = 0;
+        while self.inserted < due {
+            let u: f64 = self.rng.random();
+            let class = self
+                .cumulative
+                .iter()
+                .position(|&c| u < c)
+                .unwrap_or(self.cumulative.len() - 1);
+            let r = self.spec.sizes[class].0;
+            let mut placed = None;
+            for _ in 0..ATTEMPTS {
+                let p = self.sample(r);
+                if near
+                    .iter()
+                    .all(|&(q, rq)| (p - q).length_squared() >= (r + rq) * (r + rq))
+                {
+                    placed = Some(p);
+                    break;
+                }
+                self.rejections += 1;
+            }
+            let Some(p) = placed else { break };
+            particles.push(
+                p,
+                self.spec.velocity,
+                r,
+                self.spec.density,
+                self.spec.material,
+            );
+            near.push((p, r));
+            self.inserted += 1;
+            made += 1;
+        }
+        made
+    }
+
+    fn bounds(&self) -> (DVec3, DVec3) {
+        match self.spec.region {
+            Region::Box { min, max } => (min, max),
+            Region::Cylinder {
+                base,
+                radius,
+                height,
+            } => (
+                base - DVec3::new(radius, radius, 0.0),
+                base + DVec3::new(radius, radius, height),
+            ),
+        }
+    }
+
+    fn sample(&mut self, r: f64) -> DVec3 {
+        match self.spec.region {
+            Region::Box { min, max } => {
+                let (a, b) = (min + DVec3::splat(r), max - DVec3::splat(r));
+                DVec3::new(
+                    self.rng.random_range(a.x..b.x),
+                    self.rng.random_range(a.y..b.y),
+                    self.rng.random_range(a.z..b.z),
+                )
+            }
+            Region::Cylinder {
+                base,
+                radius,
+                height,
+            } => {
+                let rr = radius - r;
+                // Uniform over the disc: radius ~ sqrt(u).
+                let rho = rr * self.rng.random::<f64>().sqrt();
+                let phi = self.rng.random_range(0.0..std::f64::consts::TAU);
+                let z = self.rng.random_range(r..height - r);
+                base + DVec3::new(rho * phi.cos(), rho * phi.sin(), z)
+            }
+        }
+    }
+}

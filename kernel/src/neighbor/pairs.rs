@@ -1,0 +1,147 @@
+//! The Verlet pair list (half list, j > i) with per-pair contact history.
+
+use super::{CHUNK, CellGrid};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Pairs (i, j), i < j, whose surfaces are closer than `extra` (skin + reach), grouped by i in
+/// ascending j. Each pair owns a history row of `stride` f64 values.
+#[derive(Debug, Clone, Default)]
+pub struct PairList {
+    pub i: Vec<u32>,
+    pub j: Vec<u32>,
+    /// Pairs of particle p as first member: `row_start[p]..row_start[p + 1]`.
+    pub row_start: Vec<u32>,
+    pub history: Vec<f64>,
+    pub stride: usize,
+    /// Pairs of particle p as second member: `rev_pair[rev_start[p]..rev_start[p + 1]]`, ascending.
+    pub rev_start: Vec<u32>,
+    pub rev_pair: Vec<u32>,
+}
+
+struct RowChunk {
+    counts: Vec<u32>,
+    j: Vec<u32>,
+    history: Vec<f64>,
+}
+
+impl PairList {
+    pub fn empty(stride: usize) -> PairList {
+        PairList {
+            stride,
+            row_start: vec![0],
+            rev_start: vec![0],
+            ..Default::default()
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.j.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.j.is_empty()
+    }
+
+    /// Rebuilds the list for the current positions, carrying over the history of every pair
+    /// that was already listed. Run inside the simulation's thread pool.
+    pub fn rebuild(&mut self, position: &[DVec3], radius: &[f64], extra: f64) {
+        let n = position.len();
+        let r_max = radius.iter().copied().fold(0.0, f64::max);
+        let grid = CellGrid::build(position, 2.0 * r_max + extra);
+        let old = &*self;
+        let stride = self.stride;
+        let chunks: Vec<RowChunk> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
+                let mut out = RowChunk {
+                    counts: Vec::with_capacity(rows.len()),
+                    j: vec![],
+                    history: vec![],
+                };
+                let mut near = Vec::with_capacity(64);
+                for i in rows {
+                    near.clear();
+                    let (pi, ri) = (position[i], radius[i]);
+                    grid.for_each_near(pi, |j| {
+                        let ju = j as usize;
+                        if ju > i {
+                            let cut = ri + radius[ju] + extra;
+                            if (position[ju] - pi).length_squared() < cut * cut {
+                                near.push(j);
+                            }
+                        }
+                    });
+                    near.sort_unstable();
+                    out.counts.push(near.len() as u32);
+                    // Carry history: merge this row with the old row of i (both ascending in j).
+                    let old_row = if i + 1 < old.row_start.len() {
+                        old.row_start[i] as usize..old.row_start[i + 1] as usize
+                    } else {
+                        0..0
+                    };
+                    let mut k = old_row.start;
+                    for &j in &near {
+                        while k < old_row.end && old.j[k] < j {
+                            k += 1;
+                        }
+                        if k < old_row.end && old.j[k] == j {
+                            out.history
+                                .extend_from_slice(&old.history[k * stride..(k + 1) * stride]);
+                        } else {
+                            out.history.extend(std::iter::repeat_n(0.0, stride));
+                        }
+                    }
+                    out.j.extend_from_slice(&near);
+                }
+                out
+            })
+            .collect();
+
+        let total: usize = chunks.iter().map(|c| c.j.len()).sum();
+        let mut list = PairList {
+            i: Vec::with_capacity(total),
+            j: Vec::with_capacity(total),
+            row_start: Vec::with_capacity(n + 1),
+            history: Vec::with_capacity(total * stride),
+            stride,
+            rev_start: vec![0; n + 1],
+            rev_pair: vec![0; total],
+        };
+        list.row_start.push(0);
+        let mut row = 0u32;
+        for c in chunks {
+            for &cnt in &c.counts {
+                list.i.extend(std::iter::repeat_n(row, cnt as usize));
+                let last = *list.row_start.last().unwrap();
+                list.row_start.push(last + cnt);
+                row += 1;
+            }
+            list.j.extend_from_slice(&c.j);
+            list.history.extend_from_slice(&c.history);
+        }
+        for &j in &list.j {
+            list.rev_start[j as usize + 1] += 1;
+        }
+        for p in 0..n {
+            list.rev_start[p + 1] += list.rev_start[p];
+        }
+        let mut fill = list.rev_start.clone();
+        for (k, &j) in list.j.iter().enumerate() {
+            list.rev_pair[fill[j as usize] as usize] = k as u32;
+            fill[j as usize] += 1;
+        }
+        *self = list;
+    }
+
+    /// Bytes of heap memory held.
+    pub fn heap_bytes(&self) -> usize {
+        4 * (self.i.capacity()
+            + self.j.capacity()
+            + self.row_start.capacity()
+            + self.rev_start.capacity()
+            + self.rev_pair.capacity())
+            + 8 * self.history.capacity()
+    }
+}

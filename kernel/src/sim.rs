@@ -1,0 +1,812 @@
+//! The simulation: velocity-Verlet stepping with deterministic parallel force evaluation.
+//!
+//! One step:
+//! 1. half kick and drift (v += F/m dt/2, omega += T/I dt/2, x += v dt), tracking the largest
+//!    displacement since the last neighbour-list build;
+//! 2. walls move; factories create particles;
+//! 3. rebuild the pair list and wall contact list when something moved more than skin/2
+//!    (history is carried over);
+//! 4. pair phase: every listed pair's force and torques, written to the pair's own slot;
+//! 5. particle phase: each particle sums its pairs' outputs, its wall contacts and gravity in
+//!    a fixed order;
+//! 6. second half kick, with the failure checks (non-finite state, runaway speed, escape).
+//!
+//! Every sum runs in an order that does not depend on the thread count, so 1 and 2 threads
+//! give the same bits (work is split in fixed chunks of [`CHUNK`] rows).
+
+use crate::contact::{Contact, ContactModel, ContactOut};
+use crate::error::{KernelError, Result};
+use crate::factory::Factory;
+use crate::neighbor::{CHUNK, PairList};
+use crate::particles::Particles;
+use crate::timestep::{WARN_FRACTION, rayleigh_time};
+use crate::wall::{Hit, Wall};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Axis-aligned box, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+/// Everything a simulation is built from.
+pub struct Setup {
+    pub model: ContactModel,
+    pub particles: Particles,
+    pub walls: Vec<Wall>,
+    pub factories: Vec<Factory>,
+    /// Time step, s.
+    pub dt: f64,
+    /// m/s^2.
+    pub gravity: DVec3,
+    /// Verlet skin, m.
+    pub skin: f64,
+    pub threads: usize,
+    /// Particles leaving this box stop the run.
+    pub domain: Aabb,
+}
+
+/// Wall contacts of every particle, grouped by particle then (wall, feature).
+#[derive(Debug, Default, Clone)]
+struct WallContacts {
+    start: Vec<u32>,
+    wall: Vec<u16>,
+    feature: Vec<u32>,
+    history: Vec<f64>,
+    /// Force on the particle and contact point (world) of the last step.
+    force: Vec<DVec3>,
+    point: Vec<DVec3>,
+}
+
+pub struct Simulation {
+    pub particles: Particles,
+    pub model: ContactModel,
+    pub walls: Vec<Wall>,
+    pub factories: Vec<Factory>,
+    pub step: u64,
+    pub time: f64,
+    pub dt: f64,
+    pub gravity: DVec3,
+    pub domain: Aabb,
+    /// Messages worth showing the user (time step, crowded factories).
+    pub warnings: Vec<String>,
+    /// Neighbour list rebuilds so far.
+    pub rebuilds: u64,
+    /// Rayleigh time of the smallest particle, s.
+    pub rayleigh_time: f64,
+    skin: f64,
+    /// skin + the laws' reach: the list distance beyond touching.
+    extra: f64,
+    pairs: PairList,
+    pair_out: Vec<ContactOut>,
+    walls_near: WallContacts,
+    ref_position: Vec<DVec3>,
+    wall_ref_offset: Vec<DVec3>,
+    speed_limit: f64,
+    pool: rayon::ThreadPool,
+}
+
+impl Simulation {
+    /// Checks the set-up (time step, material pairs, overlaps) and prepares the first step.
+    pub fn new(setup: Setup) -> Result<Simulation> {
+        let Setup {
+            model,
+            particles,
+            walls,
+            factories,
+            dt,
+            gravity,
+            skin,
+            threads,
+            domain,
+        } = setup;
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(KernelError::OutOfRange {
+                key: "dt".into(),
+                value: dt,
+                range: "(0, inf)".into(),
+                unit: "s".into(),
+            });
+        }
+        if !(skin >= 0.0 && skin.is_finite()) {
+            return Err(KernelError::OutOfRange {
+                key: "skin".into(),
+                value: skin,
+                range: "[0, inf)".into(),
+                unit: "m".into(),
+            });
+        }
+        if threads == 0 {
+            return Err(KernelError::OutOfRange {
+                key: "threads".into(),
+                value: 0.0,
+                range: "[1, cores]".into(),
+                unit: "".into(),
+            });
+        }
+        if !gravity.is_finite() {
+            return Err(KernelError::Invalid("gravity must be finite".into()));
+        }
+        if !(domain.min.cmplt(domain.max).all()) {
+            return Err(KernelError::Invalid(format!(
+                "domain min {:?} must lie below max {:?} on every axis",
+                domain.min, domain.max
+            )));
+        }
+        let nmat = model.materials().len();
+        for i in 0..particles.len() {
+            let r = particles.radius[i];
+            if !(r > 0.0 && r.is_finite()) {
+                return Err(KernelError::OutOfRange {
+                    key: format!("particles[{i}].radius"),
+                    value: r,
+                    range: "(0, inf)".into(),
+                    unit: "m".into(),
+                });
+            }
+            if particles.material[i] as usize >= nmat {
+                return Err(KernelError::Invalid(format!(
+                    "particles[{i}] has material index {} but only {nmat} materials exist",
+                    particles.material[i]
+                )));
+            }
+            if !particles.position[i].is_finite() || !particles.velocity[i].is_finite() {
+                return Err(KernelError::Invalid(format!(
+                    "particles[{i}] has a non-finite position or velocity"
+                )));
+            }
+        }
+        // Which material pairs can meet.
+        let mut mats: Vec<usize> = particles.material.iter().map(|&m| m as usize).collect();
+        mats.extend(factories.iter().map(|f| f.spec.material as usize));
+        mats.sort_unstable();
+        mats.dedup();
+        let mut needed = vec![];
+        for (k, &a) in mats.iter().enumerate() {
+            for &b in &mats[k..] {
+                needed.push((a, b));
+            }
+            for w in &walls {
+                needed.push((a, w.material as usize));
+            }
+        }
+        model.require_pairs(&needed)?;
+
+        let mut r_min = particles
+            .radius
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let mut r_max = particles.radius.iter().copied().fold(0.0, f64::max);
+        for f in &factories {
+            r_min = r_min.min(f.min_radius());
+            r_max = r_max.max(f.max_radius());
+        }
+        let mut t_r = f64::INFINITY;
+        for &m in &mats {
+            let mat = &model.materials()[m];
+            let r = particles
+                .radius
+                .iter()
+                .zip(&particles.material)
+                .filter(|(_, pm)| **pm as usize == m)
+                .map(|(r, _)| *r)
+                .chain(
+                    factories
+                        .iter()
+                        .filter(|f| f.spec.material as usize == m)
+                        .map(|f| f.min_radius()),
+                )
+                .fold(f64::INFINITY, f64::min);
+            t_r = t_r.min(rayleigh_time(
+                r,
+                mat.density,
+                mat.shear_modulus(),
+                mat.poisson_ratio,
+            ));
+        }
+        let mut warnings = vec![];
+        if dt > WARN_FRACTION * t_r {
+            warnings.push(format!(
+                "time step {dt:.3e} s is {:.0} % of the Rayleigh time {t_r:.3e} s; EDEM practice is 20-40 %, above that contacts may be unstable",
+                100.0 * dt / t_r
+            ));
+        }
+        let reach = if r_max > 0.0 {
+            model.max_reach(r_max)
+        } else {
+            0.0
+        };
+        let extra = skin + reach;
+        // A bound no physical run reaches: free fall across the domain plus every imposed
+        // speed, ten times over.
+        let height = (domain.max - domain.min).length();
+        let imposed = particles
+            .velocity
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f64::max)
+            + factories
+                .iter()
+                .map(|f| f.spec.velocity.length())
+                .fold(0.0, f64::max)
+            + walls.iter().map(|w| w.max_speed()).fold(0.0, f64::max);
+        let speed_limit = 10.0 * ((2.0 * gravity.length() * height).sqrt() + imposed) + 1.0;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| KernelError::Invalid(format!("cannot start {threads} threads: {e}")))?;
+        let stride = model.history_stride();
+        let nwalls = walls.len();
+        let mut sim = Simulation {
+            particles,
+            model,
+            walls,
+            factories,
+            step: 0,
+            time: 0.0,
+            dt,
+            gravity,
+            domain,
+            warnings,
+            rebuilds: 0,
+            rayleigh_time: t_r,
+            skin,
+            extra,
+            pairs: PairList::empty(stride),
+            pair_out: vec![],
+            walls_near: WallContacts {
+                start: vec![0],
+                ..Default::default()
+            },
+            ref_position: vec![],
+            wall_ref_offset: vec![DVec3::ZERO; nwalls],
+            speed_limit,
+            pool,
+        };
+        sim.check_overlaps()?;
+        sim.insert_particles();
+        sim.rebuild();
+        sim.compute_forces();
+        Ok(sim)
+    }
+
+    fn check_overlaps(&mut self) -> Result<()> {
+        let p = &self.particles;
+        let mut list = PairList::empty(1);
+        self.pool
+            .install(|| list.rebuild(&p.position, &p.radius, 0.0));
+        for k in 0..list.len() {
+            let (i, j) = (list.i[k] as usize, list.j[k] as usize);
+            let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
+            if overlap > 1e-6 * p.radius[i].min(p.radius[j]) {
+                return Err(KernelError::InitialOverlap {
+                    i,
+                    j,
+                    overlap,
+                    pi: p.position[i].to_array(),
+                    pj: p.position[j].to_array(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Advances `n` steps, stopping at the first failure.
+    pub fn run(&mut self, n: u64) -> Result<()> {
+        for _ in 0..n {
+            self.advance()?;
+        }
+        Ok(())
+    }
+
+    /// One velocity-Verlet step.
+    pub fn advance(&mut self) -> Result<()> {
+        let dt = self.dt;
+        let max_disp2 = self.pool.install(|| {
+            let p = &mut self.particles;
+            p.position
+                .par_chunks_mut(CHUNK)
+                .zip(p.velocity.par_chunks_mut(CHUNK))
+                .zip(p.angular_velocity.par_chunks_mut(CHUNK))
+                .zip(p.force.par_chunks(CHUNK))
+                .zip(p.torque.par_chunks(CHUNK))
+                .zip(p.mass.par_chunks(CHUNK))
+                .zip(p.inertia.par_chunks(CHUNK))
+                .zip(self.ref_position.par_chunks(CHUNK))
+                .map(|(((((((x, v), w), f), t), m), inertia), x0)| {
+                    let mut worst: f64 = 0.0;
+                    for k in 0..x.len() {
+                        v[k] += f[k] * (0.5 * dt / m[k]);
+                        w[k] += t[k] * (0.5 * dt / inertia[k]);
+                        x[k] += v[k] * dt;
+                        worst = worst.max((x[k] - x0[k]).length_squared());
+                    }
+                    worst
+                })
+                .reduce(|| 0.0, f64::max)
+        });
+        let mut wall_disp: f64 = 0.0;
+        for (w, r0) in self.walls.iter_mut().zip(&self.wall_ref_offset) {
+            w.update_velocity();
+            w.offset += w.velocity * dt;
+            wall_disp = wall_disp.max((w.offset - *r0).length());
+        }
+        self.step += 1;
+        self.time = self.step as f64 * dt;
+        let created = self.insert_particles();
+        if created > 0 || max_disp2.sqrt() + wall_disp > 0.5 * self.skin {
+            self.rebuild();
+        }
+        self.compute_forces();
+        self.finish_kick()
+    }
+
+    /// Lets the factories create the particles due by now; returns how many were created.
+    fn insert_particles(&mut self) -> usize {
+        let mut made = 0;
+        for f in &mut self.factories {
+            if !f.done() {
+                made += f.insert(self.time, &mut self.particles);
+            }
+        }
+        if made > 0 {
+            self.ref_position.resize(self.particles.len(), DVec3::ZERO);
+        }
+        made
+    }
+
+    fn rebuild(&mut self) {
+        self.rebuilds += 1;
+        let p = &self.particles;
+        let extra = self.extra;
+        let pairs = &mut self.pairs;
+        let walls = &self.walls;
+        let old = &self.walls_near;
+        let stride = self.model.history_stride();
+        let new_walls = self.pool.install(|| {
+            pairs.rebuild(&p.position, &p.radius, extra);
+            build_wall_contacts(p, walls, old, extra, stride)
+        });
+        self.walls_near = new_walls;
+        self.pair_out
+            .resize(self.pairs.len(), ContactOut::default());
+        self.ref_position.clone_from(&self.particles.position);
+        for (r, w) in self.wall_ref_offset.iter_mut().zip(&self.walls) {
+            *r = w.offset;
+        }
+    }
+
+    fn compute_forces(&mut self) {
+        let dt = self.dt;
+        let p = &self.particles;
+        let model = &self.model;
+        let pairs = &mut self.pairs;
+        let stride = pairs.stride;
+        let (pi, pj) = (&pairs.i, &pairs.j);
+        let out = &mut self.pair_out;
+        self.pool.install(|| {
+            out.par_chunks_mut(CHUNK)
+                .zip(pairs.history.par_chunks_mut(CHUNK * stride))
+                .enumerate()
+                .for_each(|(c, (out, hist))| {
+                    let base = c * CHUNK;
+                    for (k, o) in out.iter_mut().enumerate() {
+                        let (i, j) = (pi[base + k] as usize, pj[base + k] as usize);
+                        let h = &mut hist[k * stride..(k + 1) * stride];
+                        *o = pair_force(p, model, i, j, h, dt).unwrap_or_default();
+                    }
+                });
+        });
+
+        // Particle phase: each particle's own sum, in a fixed order.
+        let gravity = self.gravity;
+        let walls = &self.walls;
+        let wc = &mut self.walls_near;
+        let pairs = &self.pairs;
+        let out = &self.pair_out;
+        let p = &mut self.particles;
+        let n = p.len();
+        // Split the wall-contact arrays at the chunk boundaries so each task owns its rows.
+        let mut wall_chunks = vec![];
+        {
+            let (mut hist, mut force, mut point) =
+                (&mut wc.history[..], &mut wc.force[..], &mut wc.point[..]);
+            let mut at = 0usize;
+            for c in 0..n.div_ceil(CHUNK) {
+                let end = wc.start[((c + 1) * CHUNK).min(n)] as usize;
+                let len = end - at;
+                let (h1, h2) = hist.split_at_mut(len * stride);
+                let (f1, f2) = force.split_at_mut(len);
+                let (p1, p2) = point.split_at_mut(len);
+                wall_chunks.push((at, h1, f1, p1));
+                hist = h2;
+                force = f2;
+                point = p2;
+                at = end;
+            }
+        }
+        let (wstart, wwall, wfeat) = (&wc.start, &wc.wall, &wc.feature);
+        let (pos, vel, omega, radius, mass, inertia, material) = (
+            &p.position,
+            &p.velocity,
+            &p.angular_velocity,
+            &p.radius,
+            &p.mass,
+            &p.inertia,
+            &p.material,
+        );
+        self.pool.install(|| {
+            p.force
+                .par_chunks_mut(CHUNK)
+                .zip(p.torque.par_chunks_mut(CHUNK))
+                .zip(wall_chunks.into_par_iter())
+                .enumerate()
+                .for_each(|(c, ((fs, ts), (wbase, whist, wforce, wpoint)))| {
+                    let mut hits: Vec<(f64, usize, Hit)> = vec![];
+                    for k in 0..fs.len() {
+                        let i = c * CHUNK + k;
+                        let mut f = gravity * mass[i];
+                        let mut t = DVec3::ZERO;
+                        for o in &out[pairs.row_start[i] as usize..pairs.row_start[i + 1] as usize]
+                        {
+                            f += o.force;
+                            t += o.torque_i;
+                        }
+                        for &kk in &pairs.rev_pair
+                            [pairs.rev_start[i] as usize..pairs.rev_start[i + 1] as usize]
+                        {
+                            let o = &out[kk as usize];
+                            f -= o.force;
+                            t += o.torque_j;
+                        }
+                        // Wall contacts: one group per wall; within a group (a mesh), nearer
+                        // triangles shadow contacts whose closest point lies on them.
+                        let (mut e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
+                        while e < end {
+                            let w = wwall[e] as usize;
+                            let mut g = e;
+                            while g < end && wwall[g] as usize == w {
+                                g += 1;
+                            }
+                            let wall = &walls[w];
+                            let local = pos[i] - wall.offset;
+                            hits.clear();
+                            for q in e..g {
+                                let h = wall.shape.hit(wfeat[q], local);
+                                hits.push((h.distance, q, h));
+                            }
+                            if hits.len() > 1 {
+                                hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                            }
+                            for a in 0..hits.len() {
+                                let (_, q, h) = hits[a];
+                                let lq = q - wbase;
+                                let hist = &mut whist[lq * stride..(lq + 1) * stride];
+                                let shadowed = (0..a).any(|b| {
+                                    let (_, qb, hb) = hits[b];
+                                    wforce[qb - wbase] != DVec3::ZERO
+                                        && wall.shape.feature_distance(hb.feature, h.point)
+                                            <= 1e-9 * radius[i]
+                                });
+                                let contact = if shadowed {
+                                    None
+                                } else {
+                                    Contact::with_wall(
+                                        pos[i],
+                                        pos[i] - h.normal * h.distance,
+                                        radius[i],
+                                        mass[i],
+                                        inertia[i],
+                                        vel[i],
+                                        omega[i],
+                                        wall.velocity,
+                                        dt,
+                                    )
+                                };
+                                let res = contact.and_then(|ct| {
+                                    model.evaluate(
+                                        material[i] as usize,
+                                        wall.material as usize,
+                                        &ct,
+                                        hist,
+                                    )
+                                });
+                                match res {
+                                    Some(o) => {
+                                        f += o.force;
+                                        t += o.torque_i;
+                                        wforce[lq] = o.force;
+                                        wpoint[lq] = h.point + wall.offset;
+                                    }
+                                    None => {
+                                        if shadowed {
+                                            hist.fill(0.0);
+                                        }
+                                        wforce[lq] = DVec3::ZERO;
+                                    }
+                                }
+                            }
+                            e = g;
+                        }
+                        fs[k] = f;
+                        ts[k] = t;
+                    }
+                });
+        });
+
+        // Wall totals: the opposite of what the walls did to the particles, summed in order.
+        for w in &mut self.walls {
+            w.force = DVec3::ZERO;
+            w.torque = DVec3::ZERO;
+        }
+        let wc = &self.walls_near;
+        for e in 0..wc.wall.len() {
+            let f = wc.force[e];
+            if f != DVec3::ZERO {
+                let w = &mut self.walls[wc.wall[e] as usize];
+                let arm = wc.point[e] - (w.shape.reference_point() + w.offset);
+                w.force -= f;
+                w.torque += arm.cross(-f);
+            }
+        }
+    }
+
+    fn finish_kick(&mut self) -> Result<()> {
+        let dt = self.dt;
+        let limit2 = self.speed_limit * self.speed_limit;
+        let dom = self.domain;
+        let p = &mut self.particles;
+        // First bad particle per chunk; the earliest chunk wins, whatever the thread count.
+        let bad = self.pool.install(|| {
+            p.velocity
+                .par_chunks_mut(CHUNK)
+                .zip(p.angular_velocity.par_chunks_mut(CHUNK))
+                .zip(p.force.par_chunks(CHUNK))
+                .zip(p.torque.par_chunks(CHUNK))
+                .zip(p.mass.par_chunks(CHUNK))
+                .zip(p.inertia.par_chunks(CHUNK))
+                .zip(p.position.par_chunks(CHUNK))
+                .enumerate()
+                .map(|(c, ((((((v, w), f), t), m), inertia), x))| {
+                    let mut first = None;
+                    for k in 0..v.len() {
+                        v[k] += f[k] * (0.5 * dt / m[k]);
+                        w[k] += t[k] * (0.5 * dt / inertia[k]);
+                        if first.is_none() {
+                            let ok = x[k].is_finite() && v[k].is_finite() && w[k].is_finite();
+                            let kind = if !ok {
+                                Some(Failure::NonFinite)
+                            } else if v[k].length_squared() > limit2 {
+                                Some(Failure::Runaway)
+                            } else if x[k].cmplt(dom.min).any() || x[k].cmpgt(dom.max).any() {
+                                Some(Failure::Escaped)
+                            } else {
+                                None
+                            };
+                            first = kind.map(|kind| (c * CHUNK + k, kind));
+                        }
+                    }
+                    first
+                })
+                .find_first(|b| b.is_some())
+                .flatten()
+        });
+        match bad {
+            None => Ok(()),
+            Some((i, kind)) => Err(self.failure(i, kind)),
+        }
+    }
+
+    fn failure(&self, i: usize, kind: Failure) -> KernelError {
+        let p = &self.particles;
+        let (x, v) = (p.position[i], p.velocity[i]);
+        let frac = self.dt / self.rayleigh_time;
+        let dt_cause = (frac > WARN_FRACTION).then(|| {
+            format!(
+                "the time step {:.3e} s is {:.0} % of the Rayleigh time {:.3e} s; use at most 40 % (EDEM practice 20-40 %)",
+                self.dt,
+                100.0 * frac,
+                self.rayleigh_time
+            )
+        });
+        let (what, cause) = match kind {
+            Failure::NonFinite => (
+                format!("particle {i} has a non-finite position, velocity or spin (x = {x:?})"),
+                dt_cause.unwrap_or_else(|| "a contact produced a non-finite force: check for particles created on top of each other or walls, and for extreme law parameters".into()),
+            ),
+            Failure::Runaway => (
+                format!("particle {i} moves at {:.3e} m/s, above the {:.3e} m/s any physical motion here can reach (runaway kinetic energy)", v.length(), self.speed_limit),
+                dt_cause.unwrap_or_else(|| "energy is being injected: particles created overlapping, a wall moving or a servo pushing too fast, or an unstable law parameter".into()),
+            ),
+            Failure::Escaped => (
+                format!("particle {i} left the domain [{:?}, {:?}] at x = {x:?}, v = {v:?}", self.domain.min, self.domain.max),
+                dt_cause.unwrap_or_else(|| "the geometry is open (a missing wall) or particles tunnelled through a wall; enlarge the domain or close the geometry".into()),
+            ),
+        };
+        KernelError::BlowUp {
+            step: self.step,
+            time: self.time,
+            what,
+            cause,
+        }
+    }
+
+    /// Number of pairs in the neighbour list.
+    pub fn pair_count(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// Contacts that currently carry force (pairs, then walls).
+    pub fn contact_counts(&self) -> (usize, usize) {
+        let pairs = self
+            .pair_out
+            .iter()
+            .filter(|o| o.force != DVec3::ZERO)
+            .count();
+        let walls = self
+            .walls_near
+            .force
+            .iter()
+            .filter(|f| **f != DVec3::ZERO)
+            .count();
+        (pairs, walls)
+    }
+
+    /// Heap bytes held by particles, the pair list and the wall contacts.
+    pub fn heap_bytes(&self) -> usize {
+        let w = &self.walls_near;
+        self.particles.heap_bytes()
+            + self.pairs.heap_bytes()
+            + self.pair_out.capacity() * std::mem::size_of::<ContactOut>()
+            + self.ref_position.capacity() * 24
+            + w.start.capacity() * 4
+            + w.wall.capacity() * 2
+            + w.feature.capacity() * 4
+            + w.history.capacity() * 8
+            + (w.force.capacity() + w.point.capacity()) * 24
+    }
+
+    /// FNV-1a hash of the bits of every position, velocity and spin: equal hashes mean
+    /// bit-identical states.
+    pub fn state_hash(&self) -> u64 {
+        let mut h: u64 = 0xcbf29ce484222325;
+        let p = &self.particles;
+        for arr in [&p.position, &p.velocity, &p.angular_velocity] {
+            for v in arr.iter() {
+                for x in v.to_array() {
+                    for b in x.to_bits().to_le_bytes() {
+                        h ^= b as u64;
+                        h = h.wrapping_mul(0x100000001b3);
+                    }
+                }
+            }
+        }
+        h
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Failure {
+    NonFinite,
+    Runaway,
+    Escaped,
+}
+
+/// The force of listed pair (i, j), or `None` when they do not interact.
+#[inline]
+fn pair_force(
+    p: &Particles,
+    model: &ContactModel,
+    i: usize,
+    j: usize,
+    h: &mut [f64],
+    dt: f64,
+) -> Option<ContactOut> {
+    let d = p.position[j] - p.position[i];
+    let dist2 = d.length_squared();
+    let rsum = p.radius[i] + p.radius[j];
+    if h[crate::contact::model::ACTIVE] == 0.0 && dist2 >= rsum * rsum {
+        return None;
+    }
+    let dist = dist2.sqrt();
+    if dist == 0.0 {
+        return None;
+    }
+    let c = Contact::between_spheres(
+        d,
+        dist,
+        (p.radius[i], p.radius[j]),
+        (p.mass[i], p.mass[j]),
+        (p.inertia[i], p.inertia[j]),
+        (p.velocity[i], p.velocity[j]),
+        (p.angular_velocity[i], p.angular_velocity[j]),
+        dt,
+    );
+    model.evaluate(p.material[i] as usize, p.material[j] as usize, &c, h)
+}
+
+/// Lists, for every particle, the wall features within `extra` of its surface, carrying the
+/// history of contacts that were already listed.
+fn build_wall_contacts(
+    p: &Particles,
+    walls: &[Wall],
+    old: &WallContacts,
+    extra: f64,
+    stride: usize,
+) -> WallContacts {
+    let n = p.len();
+    if walls.is_empty() {
+        return WallContacts {
+            start: vec![0; n + 1],
+            ..Default::default()
+        };
+    }
+    struct Chunk {
+        counts: Vec<u32>,
+        wall: Vec<u16>,
+        feature: Vec<u32>,
+        history: Vec<f64>,
+    }
+    let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = Chunk {
+                counts: vec![],
+                wall: vec![],
+                feature: vec![],
+                history: vec![],
+            };
+            let mut hits = vec![];
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                let before = out.wall.len();
+                let old_row = if i + 1 < old.start.len() {
+                    old.start[i] as usize..old.start[i + 1] as usize
+                } else {
+                    0..0
+                };
+                let mut k = old_row.start;
+                for (w, wall) in walls.iter().enumerate() {
+                    hits.clear();
+                    wall.shape
+                        .hits(p.position[i] - wall.offset, p.radius[i] + extra, &mut hits);
+                    for h in &hits {
+                        let key = (w as u16, h.feature);
+                        while k < old_row.end && (old.wall[k], old.feature[k]) < key {
+                            k += 1;
+                        }
+                        if k < old_row.end && (old.wall[k], old.feature[k]) == key {
+                            out.history
+                                .extend_from_slice(&old.history[k * stride..(k + 1) * stride]);
+                        } else {
+                            out.history.extend(std::iter::repeat_n(0.0, stride));
+                        }
+                        out.wall.push(w as u16);
+                        out.feature.push(h.feature);
+                    }
+                }
+                out.counts.push((out.wall.len() - before) as u32);
+            }
+            out
+        })
+        .collect();
+    let mut wc = WallContacts {
+        start: Vec::with_capacity(n + 1),
+        ..Default::default()
+    };
+    wc.start.push(0);
+    for c in chunks {
+        for cnt in c.counts {
+            let last = *wc.start.last().unwrap();
+            wc.start.push(last + cnt);
+        }
+        wc.wall.extend(c.wall);
+        wc.feature.extend(c.feature);
+        wc.history.extend(c.history);
+    }
+    wc.force = vec![DVec3::ZERO; wc.wall.len()];
+    wc.point = vec![DVec3::ZERO; wc.wall.len()];
+    wc
+}
