@@ -634,6 +634,11 @@ impl Simulation {
         }
     }
 
+    /// The neighbour list (pairs and their contact history).
+    pub fn pairs(&self) -> &PairList {
+        &self.pairs
+    }
+
     /// Number of pairs in the neighbour list.
     pub fn pair_count(&self) -> usize {
         self.pairs.len()

@@ -44,7 +44,8 @@ run_lmp pp_jkr_pulloff_e0.9 pp_jkr_pulloff.lammps -var dmodel tsuji -var damp "$
     -var out pp_jkr_pulloff_e0.9.csv -var raw "$WORK/pp_jkr_pulloff_e0.9.raw" \
     -var final "$WORK/pp_jkr_pulloff_e0.9.final"
 
-python3 post.py summary "$WORK" > summary.csv
+python3 post.py summary "$WORK" > "$WORK/summary.csv"
+mv "$WORK/summary.csv" summary.csv
 echo "wrote summary.csv"
 
 # independent Python re-integration of the head-on and oblique cases (fails on mismatch)
