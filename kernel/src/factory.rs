@@ -179,45 +179,30 @@ impl Factory {
         }
         let r_max = self.max_radius();
         let (lo, hi) = self.bounds();
-        // Existing particles that could touch the region.
-        let mut near: Vec<(DVec3, f64)> = (0..particles.len())
-            .filter(|&i| {
-                let p = particles.position[i];
-                let m = particles.radius[i] + r_max;
-                p.cmpge(lo - DVec3::splat(m)).all() && p.cmple(hi + DVec3::splat(m)).all()
-            })
-            .map(|i| (particles.position[i], particles.radius[i]))
-            .collect();
+        // Existing particles that could touch the region, binned so that each placement
+        // attempt checks only its neighbourhood.
+        let margin = DVec3::splat(2.0 * r_max);
+        let mut near = LocalGrid::new(lo - margin, hi + margin, 2.0 * r_max);
+        for i in 0..particles.len() {
+            near.insert(particles.position[i], particles.radius[i]);
+        }
         let mut made = 0;
         while self.inserted < due {
             let u: f64 = self.rng.random();
-            let class = self
-                .cumulative
-                .iter()
-                .position(|&c| u < c)
-                .unwrap_or(self.cumulative.len() - 1);
+            let class = self.cumulative.iter().position(|&c| u < c).unwrap_or(self.cumulative.len() - 1);
             let r = self.spec.sizes[class].0;
             let mut placed = None;
             for _ in 0..ATTEMPTS {
                 let p = self.sample(r);
-                if near
-                    .iter()
-                    .all(|&(q, rq)| (p - q).length_squared() >= (r + rq) * (r + rq))
-                {
+                if near.is_free(p, r) {
                     placed = Some(p);
                     break;
                 }
                 self.rejections += 1;
             }
             let Some(p) = placed else { break };
-            particles.push(
-                p,
-                self.spec.velocity,
-                r,
-                self.spec.density,
-                self.spec.material,
-            );
-            near.push((p, r));
+            particles.push(p, self.spec.velocity, r, self.spec.density, self.spec.material);
+            near.insert(p, r);
             self.inserted += 1;
             made += 1;
         }
@@ -261,5 +246,56 @@ impl Factory {
                 base + DVec3::new(rho * phi.cos(), rho * phi.sin(), z)
             }
         }
+    }
+}
+
+/// A uniform grid of spheres over a box; spheres outside the box are ignored (they cannot
+/// touch a particle placed inside the region).
+struct LocalGrid {
+    lo: DVec3,
+    cell: f64,
+    dims: [usize; 3],
+    cells: Vec<Vec<(DVec3, f64)>>,
+    r_max: f64,
+}
+
+impl LocalGrid {
+    fn new(lo: DVec3, hi: DVec3, cell: f64) -> LocalGrid {
+        let d = ((hi - lo) / cell).ceil().max(DVec3::ONE);
+        let dims = [d.x as usize, d.y as usize, d.z as usize];
+        LocalGrid { lo, cell, dims, cells: vec![vec![]; dims[0] * dims[1] * dims[2]], r_max: 0.0 }
+    }
+
+    fn coords(&self, p: DVec3) -> Option<[usize; 3]> {
+        let q = (p - self.lo) / self.cell;
+        let ok = (0..3).all(|k| q[k] >= 0.0 && (q[k] as usize) < self.dims[k]);
+        ok.then(|| [q.x as usize, q.y as usize, q.z as usize])
+    }
+
+    fn insert(&mut self, p: DVec3, r: f64) {
+        if let Some(c) = self.coords(p) {
+            self.r_max = self.r_max.max(r);
+            self.cells[(c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]].push((p, r));
+        }
+    }
+
+    /// No stored sphere overlaps a sphere of radius `r` at `p`.
+    fn is_free(&self, p: DVec3, r: f64) -> bool {
+        let reach = ((r + self.r_max) / self.cell).ceil() as i64;
+        let q = ((p - self.lo) / self.cell).floor();
+        for z in q.z as i64 - reach..=q.z as i64 + reach {
+            for y in q.y as i64 - reach..=q.y as i64 + reach {
+                for x in q.x as i64 - reach..=q.x as i64 + reach {
+                    if x < 0 || y < 0 || z < 0 || x >= self.dims[0] as i64 || y >= self.dims[1] as i64 || z >= self.dims[2] as i64 {
+                        continue;
+                    }
+                    let c = (z as usize * self.dims[1] + y as usize) * self.dims[0] + x as usize;
+                    if self.cells[c].iter().any(|&(s, rs)| (p - s).length_squared() < (r + rs) * (r + rs)) {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
     }
 }

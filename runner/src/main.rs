@@ -1,1 +1,17 @@
-fn main() {}
+//! The `tilth` binary: parse the arguments, run the command, map errors to exit codes
+//! (see the library's documentation).
+
+use clap::Parser;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = tilth::cli::Cli::parse();
+    match tilth::cli::execute(cli, &mut std::io::stdout().lock()) {
+        Ok(()) => ExitCode::from(tilth::EXIT_OK),
+        Err(e) if tilth::is_broken_pipe(&e) => ExitCode::from(tilth::EXIT_OK),
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(tilth::exit_code(&e))
+        }
+    }
+}

@@ -24,12 +24,14 @@ impl CellGrid {
             lo = DVec3::ZERO;
             hi = DVec3::ZERO;
         }
+        // A zero or non-finite cell (no particles yet) would never satisfy the cap below.
+        let min_cell = if min_cell > 0.0 && min_cell.is_finite() { min_cell } else { 1.0 };
         let extent = (hi - lo).max(DVec3::splat(min_cell));
         let mut cell = min_cell;
         let max_cells = (4 * points.len()).max(64) as f64;
         loop {
             let d = (extent / cell).floor() + DVec3::ONE;
-            if d.x * d.y * d.z <= max_cells {
+            if d.x * d.y * d.z <= max_cells || !cell.is_finite() {
                 break;
             }
             cell *= 1.25;
@@ -93,5 +95,21 @@ impl CellGrid {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_and_single_point_grids_terminate() {
+        let g = CellGrid::build(&[], 0.0);
+        let mut n = 0;
+        g.for_each_near(DVec3::ZERO, |_| n += 1);
+        assert_eq!(n, 0);
+        let g = CellGrid::build(&[DVec3::ONE], 0.0);
+        g.for_each_near(DVec3::ONE, |_| n += 1);
+        assert_eq!(n, 1);
     }
 }

@@ -5,6 +5,7 @@ use anyhow::{Context, Result, bail};
 use serde::Deserialize;
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::material::Material;
+use tilth_kernel::particles::Particles;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -125,4 +126,38 @@ pub fn resolve(sections: &[FactorySection], materials: &[Material], seed: u64) -
         out.push(Factory::new(spec).with_context(|| format!("factories[{k}]"))?);
     }
     Ok(out)
+}
+
+/// Works around a kernel hang: `Simulation::new` never returns when it starts with no
+/// particles (its overlap check bins zero points into cells of size 0). When the scene has no
+/// explicit particles, this lets the factory that starts first create its first particle
+/// (or, for an all-at-once factory, its whole batch) before the simulation is built. For an
+/// all-at-once factory starting at t = 0 that is exactly what the kernel would do; otherwise
+/// the particle appears up to 1.5/rate + start_time early, and a note says so when that is
+/// more than [`PRIME_NOTE_AFTER`].
+pub const PRIME_NOTE_AFTER: f64 = 1e-3;
+
+pub fn prime(particles: &mut Particles, factories: &mut [Factory]) -> Result<Option<String>> {
+    if !particles.is_empty() {
+        return Ok(None);
+    }
+    let first_due = |f: &Factory| f.spec.start_time + 1.5 / f.spec.rate;
+    let Some((k, f)) = factories
+        .iter_mut()
+        .enumerate()
+        .min_by(|a, b| first_due(a.1).total_cmp(&first_due(b.1)))
+    else {
+        bail!("the scene has no particles: add [[particles]] or [[factories]]");
+    };
+    let t = first_due(f);
+    f.insert(t, particles);
+    if particles.is_empty() {
+        bail!("factories[{k}] cannot place its first particle: its region is too small or full");
+    }
+    Ok((t > PRIME_NOTE_AFTER).then(|| {
+        format!(
+            "factories[{k}] created {} particle(s) at t = 0 that were due at t = {t:.3e} s (a work-around: the kernel cannot start without particles)",
+            particles.len()
+        )
+    }))
 }

@@ -84,7 +84,11 @@ pub struct SceneInfo {
 /// A scene ready to run.
 pub struct Loaded {
     pub sim: Simulation,
+    /// Worker threads the simulation uses.
+    pub threads: usize,
     pub steps: u64,
+    /// Notes about the set-up worth showing (besides the kernel's `sim.warnings`).
+    pub warnings: Vec<String>,
     /// Steps between recorded samples (`output.every`).
     pub sample_every: Option<u64>,
     pub info: SceneInfo,
@@ -140,10 +144,12 @@ impl Scene {
         };
         let pairs: Vec<_> = self.pairs.iter().map(PairSection::to_spec).collect();
         let model = ContactModel::build(&materials, &spec, &pairs)?;
-        let particles = particles::resolve(&self.particles, &materials)?;
-        let factories = factories::resolve(&self.factories, &materials, self.simulation.seed)?;
+        let mut particles = particles::resolve(&self.particles, &materials)?;
+        let mut factories = factories::resolve(&self.factories, &materials, self.simulation.seed)?;
         let walls = walls::resolve(&self.walls, &names, base_dir)?;
         let sim = self.simulation.resolve(&particles, &self.factories)?;
+        let mut warnings = vec![];
+        warnings.extend(factories::prime(&mut particles, &mut factories)?);
         let sample_every = self.output.resolve(sim.dt)?;
         let info = SceneInfo {
             origin: String::new(),
@@ -158,6 +164,7 @@ impl Scene {
             factories: self.factories.len(),
             explicit_particles: self.particles.len(),
         };
+        let threads = threads.unwrap_or(sim.threads);
         let setup = Setup {
             model,
             particles,
@@ -166,11 +173,13 @@ impl Scene {
             dt: sim.dt,
             gravity: sim.gravity,
             skin: sim.skin,
-            threads: threads.unwrap_or(sim.threads),
+            threads,
             domain: sim.domain,
         };
         Ok(Loaded {
             sim: Simulation::new(setup)?,
+            threads,
+            warnings,
             steps: sim.steps,
             sample_every,
             info,

@@ -1,0 +1,36 @@
+//! The command-line surface.
+
+use crate::commands::{bench, laws, run};
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use std::io::Write;
+
+/// tilth: a deterministic DEM workbench for calibrating soil models.
+#[derive(Debug, Parser)]
+#[command(name = "tilth", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run a scene file (TOML) and print a summary; without FILE, run the embedded demo.
+    Run(run::RunArgs),
+    /// List every contact law: slot, parameters with units, ranges and defaults.
+    Laws,
+    /// Speed benchmarks.
+    Bench {
+        #[command(subcommand)]
+        which: bench::Bench,
+    },
+}
+
+/// Runs the parsed command, writing results to `out` (progress and warnings go to stderr).
+pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
+    match cli.command {
+        Command::Run(args) => run::run(&args, out),
+        Command::Laws => laws::laws(out),
+        Command::Bench { which } => bench::bench(&which, out),
+    }
+}

@@ -1,0 +1,6 @@
+//! The subcommands.
+
+pub mod bench;
+pub mod laws;
+pub mod report;
+pub mod run;

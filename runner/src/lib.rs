@@ -1,0 +1,38 @@
+//! tilth: the command-line front end of the tilth DEM workbench.
+//!
+//! [`config`] turns a TOML scene file into a checked kernel simulation; [`commands`] holds
+//! `run`, `laws` and `bench`; [`cli`] is the argument surface the thin `main.rs` parses.
+//!
+//! Exit codes: 0 success, 1 the run failed (the kernel stopped it: [`KernelError::BlowUp`]),
+//! 2 bad input or usage. A closed stdout (broken pipe) is not an error.
+
+pub mod cli;
+pub mod commands;
+pub mod config;
+pub mod progress;
+
+use tilth_kernel::KernelError;
+
+/// Exit code for success.
+pub const EXIT_OK: u8 = 0;
+/// Exit code when the simulation itself failed.
+pub const EXIT_RUN_FAILED: u8 = 1;
+/// Exit code for bad input (scene file, arguments).
+pub const EXIT_BAD_INPUT: u8 = 2;
+
+/// The exit code for an error: [`EXIT_RUN_FAILED`] when the kernel stopped a run,
+/// [`EXIT_BAD_INPUT`] otherwise.
+pub fn exit_code(err: &anyhow::Error) -> u8 {
+    let blew_up = err
+        .chain()
+        .any(|e| matches!(e.downcast_ref::<KernelError>(), Some(KernelError::BlowUp { .. })));
+    if blew_up { EXIT_RUN_FAILED } else { EXIT_BAD_INPUT }
+}
+
+/// Whether the error is only stdout closing under us (`tilth laws | head`).
+pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|e| {
+        e.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
