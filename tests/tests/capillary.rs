@@ -1,0 +1,53 @@
+//! The worked example of kernel/ADDING_A_LAW.md: the `capillary` extra law against the
+//! Willett et al. (2000) closed form and the Lian et al. (1993) rupture distance.
+
+mod common;
+use common::*;
+use glam::DVec3;
+use std::f64::consts::PI;
+use tilth_kernel::contact::{Contact, ContactModel, ModelSpec, PairSpec};
+
+const V: f64 = 1e-11; // bridge volume, m^3 (about 0.3 % of a 2 mm sphere)
+const GAMMA: f64 = 0.072;
+const THETA_DEG: f64 = 20.0;
+
+fn capillary_model() -> ContactModel {
+    let spec = ModelSpec { extra: vec!["capillary".into()], ..spec("hertz", None, None, None) };
+    let pair = PairSpec {
+        materials: ("soil".into(), "soil".into()),
+        params: params(&[("bridge_volume", V), ("surface_tension", GAMMA), ("contact_angle", THETA_DEG)]),
+    };
+    ContactModel::build(&[soil()], &spec, &[pair]).unwrap()
+}
+
+fn at(overlap: f64) -> Contact {
+    let dist = 2.0 * R - overlap;
+    Contact::between_spheres(DVec3::new(dist, 0.0, 0.0), dist, (R, R), (1.0, 1.0), (1.0, 1.0), (DVec3::ZERO, DVec3::ZERO), (DVec3::ZERO, DVec3::ZERO), 1e-6)
+}
+
+#[test]
+fn bridge_force_follows_willett_and_ruptures_at_lian_distance() {
+    let m = capillary_model();
+    let mut h = vec![0.0; m.history_stride()];
+    let r_eff = R / 2.0;
+    let theta = THETA_DEG.to_radians();
+    let rupture = (1.0 + theta / 2.0) * V.cbrt();
+    // Forms on contact.
+    assert!(m.evaluate(0, 0, &at(1e-7), &mut h).is_some());
+    for k in 1..20 {
+        let gap = rupture * k as f64 / 20.0;
+        let f = -m.evaluate(0, 0, &at(-gap), &mut h).expect("bridge holds below the rupture gap").force.x;
+        let s = gap * (r_eff / V).sqrt();
+        let expected = -2.0 * PI * r_eff * GAMMA * theta.cos() / (1.0 + 1.05 * s + 2.5 * s * s);
+        assert!((f - expected).abs() < 1e-12 * expected.abs(), "gap {gap}: {f} vs {expected}");
+    }
+    assert!(m.evaluate(0, 0, &at(-1.001 * rupture), &mut h).is_none(), "ruptured beyond S_c");
+    assert!(m.evaluate(0, 0, &at(-0.5 * rupture), &mut h).is_none(), "no bridge across a gap before contact");
+}
+
+#[test]
+fn bridge_reach_keeps_pairs_in_the_neighbour_list() {
+    let m = capillary_model();
+    let rupture = (1.0 + THETA_DEG.to_radians() / 2.0) * V.cbrt();
+    assert!((m.max_reach(R) - rupture).abs() < 1e-15);
+}
