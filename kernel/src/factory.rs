@@ -189,7 +189,11 @@ impl Factory {
         let mut made = 0;
         while self.inserted < due {
             let u: f64 = self.rng.random();
-            let class = self.cumulative.iter().position(|&c| u < c).unwrap_or(self.cumulative.len() - 1);
+            let class = self
+                .cumulative
+                .iter()
+                .position(|&c| u < c)
+                .unwrap_or(self.cumulative.len() - 1);
             let r = self.spec.sizes[class].0;
             let mut placed = None;
             for _ in 0..ATTEMPTS {
@@ -201,7 +205,13 @@ impl Factory {
                 self.rejections += 1;
             }
             let Some(p) = placed else { break };
-            particles.push(p, self.spec.velocity, r, self.spec.density, self.spec.material);
+            particles.push(
+                p,
+                self.spec.velocity,
+                r,
+                self.spec.density,
+                self.spec.material,
+            );
             near.insert(p, r);
             self.inserted += 1;
             made += 1;
@@ -263,7 +273,13 @@ impl LocalGrid {
     fn new(lo: DVec3, hi: DVec3, cell: f64) -> LocalGrid {
         let d = ((hi - lo) / cell).ceil().max(DVec3::ONE);
         let dims = [d.x as usize, d.y as usize, d.z as usize];
-        LocalGrid { lo, cell, dims, cells: vec![vec![]; dims[0] * dims[1] * dims[2]], r_max: 0.0 }
+        LocalGrid {
+            lo,
+            cell,
+            dims,
+            cells: vec![vec![]; dims[0] * dims[1] * dims[2]],
+            r_max: 0.0,
+        }
     }
 
     fn coords(&self, p: DVec3) -> Option<[usize; 3]> {
@@ -286,11 +302,20 @@ impl LocalGrid {
         for z in q.z as i64 - reach..=q.z as i64 + reach {
             for y in q.y as i64 - reach..=q.y as i64 + reach {
                 for x in q.x as i64 - reach..=q.x as i64 + reach {
-                    if x < 0 || y < 0 || z < 0 || x >= self.dims[0] as i64 || y >= self.dims[1] as i64 || z >= self.dims[2] as i64 {
+                    if x < 0
+                        || y < 0
+                        || z < 0
+                        || x >= self.dims[0] as i64
+                        || y >= self.dims[1] as i64
+                        || z >= self.dims[2] as i64
+                    {
                         continue;
                     }
                     let c = (z as usize * self.dims[1] + y as usize) * self.dims[0] + x as usize;
-                    if self.cells[c].iter().any(|&(s, rs)| (p - s).length_squared() < (r + rs) * (r + rs)) {
+                    if self.cells[c]
+                        .iter()
+                        .any(|&(s, rs)| (p - s).length_squared() < (r + rs) * (r + rs))
+                    {
                         return false;
                     }
                 }

@@ -52,6 +52,23 @@ impl Particles {
         self.material.push(material);
     }
 
+    /// Reorders every array so that new particle k is old particle `old_of_new[k]`.
+    pub fn permute(&mut self, old_of_new: &[u32]) {
+        fn apply<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
+            *v = order.iter().map(|&o| v[o as usize]).collect();
+        }
+        apply(&mut self.position, old_of_new);
+        apply(&mut self.velocity, old_of_new);
+        apply(&mut self.angular_velocity, old_of_new);
+        apply(&mut self.force, old_of_new);
+        apply(&mut self.torque, old_of_new);
+        apply(&mut self.radius, old_of_new);
+        apply(&mut self.mass, old_of_new);
+        apply(&mut self.inertia, old_of_new);
+        apply(&mut self.material, old_of_new);
+        apply(&mut self.id, old_of_new);
+    }
+
     /// Translational plus rotational kinetic energy, J.
     pub fn kinetic_energy(&self) -> f64 {
         let mut e = 0.0;

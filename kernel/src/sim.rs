@@ -24,6 +24,11 @@ use crate::wall::{Hit, Wall};
 use glam::DVec3;
 use rayon::prelude::*;
 
+/// Steps between spatial reorderings of the particles (cell order, for cache locality; as
+/// LAMMPS's `atom_modify sort`). A fixed step schedule, not a rebuild count, so that runs
+/// with different skins reorder at the same moments.
+pub const SORT_EVERY: u64 = 1000;
+
 /// Steps between factory insertions (particles due meanwhile appear together).
 pub const INSERT_EVERY: u64 = 50;
 
@@ -88,7 +93,10 @@ pub struct Simulation {
     ref_position: Vec<DVec3>,
     wall_ref_offset: Vec<DVec3>,
     speed_limit: f64,
-    pool: rayon::ThreadPool,
+    /// Set by a reorder, consumed by the rebuild that follows it.
+    pending_order: Option<Vec<u32>>,
+    /// Shared so `run` can enter it once; nested `install` calls from inside are direct calls.
+    pool: std::sync::Arc<rayon::ThreadPool>,
 }
 
 impl Simulation {
@@ -237,10 +245,14 @@ impl Simulation {
                 .fold(0.0, f64::max)
             + walls.iter().map(|w| w.max_speed()).fold(0.0, f64::max);
         let speed_limit = 10.0 * ((2.0 * gravity.length() * height).sqrt() + imposed) + 1.0;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| KernelError::Invalid(format!("cannot start {threads} threads: {e}")))?;
+        let pool = std::sync::Arc::new(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| {
+                    KernelError::Invalid(format!("cannot start {threads} threads: {e}"))
+                })?,
+        );
         let stride = model.history_stride();
         let nwalls = walls.len();
         let mut sim = Simulation {
@@ -267,6 +279,7 @@ impl Simulation {
             ref_position: vec![],
             wall_ref_offset: vec![DVec3::ZERO; nwalls],
             speed_limit,
+            pending_order: None,
             pool,
         };
         sim.check_overlaps()?;
@@ -280,7 +293,7 @@ impl Simulation {
         let p = &self.particles;
         let mut list = PairList::empty(1);
         self.pool
-            .install(|| list.rebuild(&p.position, &p.radius, 0.0));
+            .install(|| list.rebuild(&p.position, &p.radius, &p.id, 0.0, None));
         for k in 0..list.len() {
             let (i, j) = (list.i[k] as usize, list.j[k] as usize);
             let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
@@ -299,10 +312,19 @@ impl Simulation {
 
     /// Advances `n` steps, stopping at the first failure.
     pub fn run(&mut self, n: u64) -> Result<()> {
-        for _ in 0..n {
-            self.advance()?;
-        }
-        Ok(())
+        // Enter the pool once: every parallel phase below then runs without a hand-off.
+        let pool = std::sync::Arc::clone(&self.pool);
+        pool.install(|| {
+            for _ in 0..n {
+                self.advance()?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Number of worker threads.
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
     }
 
     /// One velocity-Verlet step.
@@ -341,8 +363,16 @@ impl Simulation {
         self.time = self.step as f64 * dt;
         // Factories fill in batches: a new particle forces a list rebuild, so inserting a
         // few every step would rebuild every step.
-        let created = if self.step % INSERT_EVERY == 0 { self.insert_particles() } else { 0 };
-        if created > 0 || max_disp2.sqrt() + wall_disp > 0.5 * self.skin {
+        let created = if self.step % INSERT_EVERY == 0 {
+            self.insert_particles()
+        } else {
+            0
+        };
+        let sort = self.step % SORT_EVERY == 0;
+        if sort {
+            self.sort_particles();
+        }
+        if sort || created > 0 || max_disp2.sqrt() + wall_disp > 0.5 * self.skin {
             self.rebuild();
         }
         self.compute_forces();
@@ -363,6 +393,18 @@ impl Simulation {
         made
     }
 
+    /// Puts the particles in cell order; the next rebuild carries history through the
+    /// permutation.
+    fn sort_particles(&mut self) {
+        let p = &self.particles;
+        let r_max = p.radius.iter().copied().fold(0.0, f64::max);
+        // Cells from the particle size alone, so the order does not depend on the skin.
+        let grid = crate::neighbor::CellGrid::build(&p.position, 2.0 * r_max);
+        let order = grid.cell_order().to_vec();
+        self.particles.permute(&order);
+        self.pending_order = Some(order);
+    }
+
     fn rebuild(&mut self) {
         self.rebuilds += 1;
         let p = &self.particles;
@@ -371,9 +413,10 @@ impl Simulation {
         let walls = &self.walls;
         let old = &self.walls_near;
         let stride = self.model.history_stride();
+        let order = self.pending_order.take();
         let new_walls = self.pool.install(|| {
-            pairs.rebuild(&p.position, &p.radius, extra);
-            build_wall_contacts(p, walls, old, extra, stride)
+            pairs.rebuild(&p.position, &p.radius, &p.id, extra, order.as_deref());
+            build_wall_contacts(p, walls, old, extra, stride, order.as_deref())
         });
         self.walls_near = new_walls;
         self.pair_out
@@ -690,13 +733,16 @@ impl Simulation {
             + (w.force.capacity() + w.point.capacity()) * 24
     }
 
-    /// FNV-1a hash of the bits of every position, velocity and spin: equal hashes mean
-    /// bit-identical states.
+    /// FNV-1a hash of the bits of every position, velocity and spin, in particle-id order:
+    /// equal hashes mean bit-identical states.
     pub fn state_hash(&self) -> u64 {
         let mut h: u64 = 0xcbf29ce484222325;
         let p = &self.particles;
+        // In id order, so the hash does not depend on how particles are currently sorted.
+        let mut by_id: Vec<usize> = (0..p.len()).collect();
+        by_id.sort_unstable_by_key(|&i| p.id[i]);
         for arr in [&p.position, &p.velocity, &p.angular_velocity] {
-            for v in arr.iter() {
+            for v in by_id.iter().map(|&i| &arr[i]) {
                 for x in v.to_array() {
                     for b in x.to_bits().to_le_bytes() {
                         h ^= b as u64;
@@ -757,6 +803,7 @@ fn build_wall_contacts(
     old: &WallContacts,
     extra: f64,
     stride: usize,
+    old_of_new: Option<&[u32]>,
 ) -> WallContacts {
     let n = p.len();
     if walls.is_empty() {
@@ -783,8 +830,9 @@ fn build_wall_contacts(
             let mut hits = vec![];
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 let before = out.wall.len();
-                let old_row = if i + 1 < old.start.len() {
-                    old.start[i] as usize..old.start[i + 1] as usize
+                let oi = old_of_new.map_or(i, |m| m[i] as usize);
+                let old_row = if oi + 1 < old.start.len() {
+                    old.start[oi] as usize..old.start[oi + 1] as usize
                 } else {
                     0..0
                 };

@@ -23,10 +23,17 @@ pub const EXIT_BAD_INPUT: u8 = 2;
 /// The exit code for an error: [`EXIT_RUN_FAILED`] when the kernel stopped a run,
 /// [`EXIT_BAD_INPUT`] otherwise.
 pub fn exit_code(err: &anyhow::Error) -> u8 {
-    let blew_up = err
-        .chain()
-        .any(|e| matches!(e.downcast_ref::<KernelError>(), Some(KernelError::BlowUp { .. })));
-    if blew_up { EXIT_RUN_FAILED } else { EXIT_BAD_INPUT }
+    let blew_up = err.chain().any(|e| {
+        matches!(
+            e.downcast_ref::<KernelError>(),
+            Some(KernelError::BlowUp { .. })
+        )
+    });
+    if blew_up {
+        EXIT_RUN_FAILED
+    } else {
+        EXIT_BAD_INPUT
+    }
 }
 
 /// Whether the error is only stdout closing under us (`tilth laws | head`).

@@ -10,7 +10,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::from(tilth::EXIT_OK),
         Err(e) if tilth::is_broken_pipe(&e) => ExitCode::from(tilth::EXIT_OK),
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", format!("{e:#}").trim_end());
             ExitCode::from(tilth::exit_code(&e))
         }
     }

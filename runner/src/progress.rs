@@ -18,7 +18,7 @@ impl Progress {
         let bar = if show && std::io::stderr().is_terminal() {
             let bar = ProgressBar::with_draw_target(Some(steps), ProgressDrawTarget::stderr());
             let style = ProgressStyle::with_template(
-                "{bar:30} {pos}/{len} steps  {msg}  [{elapsed_precise}, ETA {eta}]",
+                "{bar:20} {pos}/{len} steps, {elapsed} elapsed, ETA {eta}: {wide_msg}",
             )
             .expect("valid template")
             .progress_chars("=> ");

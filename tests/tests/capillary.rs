@@ -12,17 +12,33 @@ const GAMMA: f64 = 0.072;
 const THETA_DEG: f64 = 20.0;
 
 fn capillary_model() -> ContactModel {
-    let spec = ModelSpec { extra: vec!["capillary".into()], ..spec("hertz", None, None, None) };
+    let spec = ModelSpec {
+        extra: vec!["capillary".into()],
+        ..spec("hertz", None, None, None)
+    };
     let pair = PairSpec {
         materials: ("soil".into(), "soil".into()),
-        params: params(&[("bridge_volume", V), ("surface_tension", GAMMA), ("contact_angle", THETA_DEG)]),
+        params: params(&[
+            ("bridge_volume", V),
+            ("surface_tension", GAMMA),
+            ("contact_angle", THETA_DEG),
+        ]),
     };
     ContactModel::build(&[soil()], &spec, &[pair]).unwrap()
 }
 
 fn at(overlap: f64) -> Contact {
     let dist = 2.0 * R - overlap;
-    Contact::between_spheres(DVec3::new(dist, 0.0, 0.0), dist, (R, R), (1.0, 1.0), (1.0, 1.0), (DVec3::ZERO, DVec3::ZERO), (DVec3::ZERO, DVec3::ZERO), 1e-6)
+    Contact::between_spheres(
+        DVec3::new(dist, 0.0, 0.0),
+        dist,
+        (R, R),
+        (1.0, 1.0),
+        (1.0, 1.0),
+        (DVec3::ZERO, DVec3::ZERO),
+        (DVec3::ZERO, DVec3::ZERO),
+        1e-6,
+    )
 }
 
 #[test]
@@ -36,13 +52,26 @@ fn bridge_force_follows_willett_and_ruptures_at_lian_distance() {
     assert!(m.evaluate(0, 0, &at(1e-7), &mut h).is_some());
     for k in 1..20 {
         let gap = rupture * k as f64 / 20.0;
-        let f = -m.evaluate(0, 0, &at(-gap), &mut h).expect("bridge holds below the rupture gap").force.x;
+        let f = -m
+            .evaluate(0, 0, &at(-gap), &mut h)
+            .expect("bridge holds below the rupture gap")
+            .force
+            .x;
         let s = gap * (r_eff / V).sqrt();
         let expected = -2.0 * PI * r_eff * GAMMA * theta.cos() / (1.0 + 1.05 * s + 2.5 * s * s);
-        assert!((f - expected).abs() < 1e-12 * expected.abs(), "gap {gap}: {f} vs {expected}");
+        assert!(
+            (f - expected).abs() < 1e-12 * expected.abs(),
+            "gap {gap}: {f} vs {expected}"
+        );
     }
-    assert!(m.evaluate(0, 0, &at(-1.001 * rupture), &mut h).is_none(), "ruptured beyond S_c");
-    assert!(m.evaluate(0, 0, &at(-0.5 * rupture), &mut h).is_none(), "no bridge across a gap before contact");
+    assert!(
+        m.evaluate(0, 0, &at(-1.001 * rupture), &mut h).is_none(),
+        "ruptured beyond S_c"
+    );
+    assert!(
+        m.evaluate(0, 0, &at(-0.5 * rupture), &mut h).is_none(),
+        "no bridge across a gap before contact"
+    );
 }
 
 #[test]

@@ -13,7 +13,13 @@ const HALF: f64 = 0.0175;
 
 fn elastic_energy(p: &Particles) -> f64 {
     let e_eff = 1.0 / (2.0 * (1.0 - NU * NU) / E);
-    let u = |r_eff: f64, d: f64| if d > 0.0 { 8.0 / 15.0 * e_eff * r_eff.sqrt() * d.powf(2.5) } else { 0.0 };
+    let u = |r_eff: f64, d: f64| {
+        if d > 0.0 {
+            8.0 / 15.0 * e_eff * r_eff.sqrt() * d.powf(2.5)
+        } else {
+            0.0
+        }
+    };
     let mut total = 0.0;
     for i in 0..p.len() {
         for j in i + 1..p.len() {
@@ -32,16 +38,24 @@ fn elastic_energy(p: &Particles) -> f64 {
 
 #[test]
 fn hertz_gas_conserves_energy() {
-    let m = model(&spec("hertz", Some("restitution"), None, None), &[("restitution", 1.0)]);
+    let m = model(
+        &spec("hertz", Some("restitution"), None, None),
+        &[("restitution", 1.0)],
+    );
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     let mut p = Particles::default();
     // 10 x 10 x 10 lattice with 3.4 mm spacing, random unit-speed directions.
     for ix in 0..10 {
         for iy in 0..10 {
             for iz in 0..10 {
-                let x = DVec3::new(ix as f64, iy as f64, iz as f64) * 3.4e-3 - DVec3::splat(4.5 * 3.4e-3);
+                let x = DVec3::new(ix as f64, iy as f64, iz as f64) * 3.4e-3
+                    - DVec3::splat(4.5 * 3.4e-3);
                 let dir = loop {
-                    let v = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                    let v = DVec3::new(
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                    );
                     if v.length_squared() > 0.01 && v.length_squared() <= 1.0 {
                         break v.normalize();
                     }
@@ -54,7 +68,12 @@ fn hertz_gas_conserves_energy() {
         .flat_map(|k| {
             [-1.0, 1.0].map(|s: f64| {
                 let n = DVec3::AXES[k] * -s;
-                Wall::new("box", Box::new(Plane::new(DVec3::AXES[k] * s * HALF, n).unwrap()), 0, Motion::Fixed)
+                Wall::new(
+                    "box",
+                    Box::new(Plane::new(DVec3::AXES[k] * s * HALF, n).unwrap()),
+                    0,
+                    Motion::Fixed,
+                )
             })
         })
         .collect();
@@ -63,7 +82,10 @@ fn hertz_gas_conserves_energy() {
     s.run(100_000).unwrap();
     let e1 = s.particles.kinetic_energy() + elastic_energy(&s.particles);
     let drift = (e1 - e0).abs() / e0;
-    eprintln!("energy {e0} -> {e1}, drift {drift:.2e}, rebuilds {}", s.rebuilds);
+    eprintln!(
+        "energy {e0} -> {e1}, drift {drift:.2e}, rebuilds {}",
+        s.rebuilds
+    );
     assert!(drift < 1e-3, "energy drift {drift}");
     // The gas really collided: many rebuilds and a changed velocity distribution.
     assert!(s.rebuilds > 100);

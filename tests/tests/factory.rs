@@ -8,7 +8,10 @@ use tilth_kernel::particles::Particles;
 
 fn spec(basis: Basis, rate: f64, count: usize, seed: u64) -> FactorySpec {
     FactorySpec {
-        region: Region::Box { min: DVec3::splat(-0.05), max: DVec3::splat(0.05) },
+        region: Region::Box {
+            min: DVec3::splat(-0.05),
+            max: DVec3::splat(0.05),
+        },
         sizes: vec![(1e-3, 0.5), (0.5e-3, 0.5)],
         basis,
         material: 0,
@@ -30,9 +33,15 @@ fn rate_and_no_overlaps() {
     assert_eq!(f.insert(1.0, &mut p), 2_750, "capped at count");
     assert_eq!(f.insert(2.0, &mut p), 0);
     for i in 0..p.len() {
-        assert!(p.position[i].abs().max_element() <= 0.05 - p.radius[i], "outside region");
+        assert!(
+            p.position[i].abs().max_element() <= 0.05 - p.radius[i],
+            "outside region"
+        );
         for j in i + 1..p.len() {
-            assert!((p.position[i] - p.position[j]).length() >= p.radius[i] + p.radius[j], "{i} and {j} overlap");
+            assert!(
+                (p.position[i] - p.position[j]).length() >= p.radius[i] + p.radius[j],
+                "{i} and {j} overlap"
+            );
         }
     }
 }
@@ -45,7 +54,11 @@ fn check_fraction(basis: Basis, q: f64) {
     f.insert(0.0, &mut p);
     let big = p.radius.iter().filter(|&&r| r == 1e-3).count() as f64;
     let sigma = (n as f64 * q * (1.0 - q)).sqrt();
-    assert!((big - n as f64 * q).abs() < 5.0 * sigma, "{basis:?}: {big} large of {n}, expected {}", n as f64 * q);
+    assert!(
+        (big - n as f64 * q).abs() < 5.0 * sigma,
+        "{basis:?}: {big} large of {n}, expected {}",
+        n as f64 * q
+    );
 }
 
 #[test]
@@ -72,8 +85,16 @@ fn bad_factory_input_is_refused() {
     let mut s = spec(Basis::Number, 1e3, 10, 1);
     s.sizes = vec![(-1e-3, 1.0)];
     let e = Factory::new(s).unwrap_err().to_string();
-    assert!(e.contains("factory.sizes[0].radius") && e.contains("(0, inf)"), "{e}");
+    assert!(
+        e.contains("factory.sizes[0].radius") && e.contains("(0, inf)"),
+        "{e}"
+    );
     let mut s = spec(Basis::Number, 0.0, 10, 1);
     s.rate = 0.0;
-    assert!(Factory::new(s).unwrap_err().to_string().contains("factory.rate"));
+    assert!(
+        Factory::new(s)
+            .unwrap_err()
+            .to_string()
+            .contains("factory.rate")
+    );
 }

@@ -54,12 +54,19 @@ fn force_overlap_curve_matches_the_parametric_formula() {
         .filter(|a| a * a / r - (4.0 * PI * GAMMA * a / e).sqrt() > delta_c)
         .collect();
     assert!(radii.len() > 300);
-    let overlaps: Vec<f64> = radii.iter().map(|a| a * a / r - (4.0 * PI * GAMMA * a / e).sqrt()).collect();
+    let overlaps: Vec<f64> = radii
+        .iter()
+        .map(|a| a * a / r - (4.0 * PI * GAMMA * a / e).sqrt())
+        .collect();
     let forces = path(&overlaps);
     for ((a, d), f) in radii.iter().zip(&overlaps).zip(&forces) {
-        let expected = 4.0 * e * a.powi(3) / (3.0 * r) - 4.0 * (PI * GAMMA * e).sqrt() * a.powf(1.5);
+        let expected =
+            4.0 * e * a.powi(3) / (3.0 * r) - 4.0 * (PI * GAMMA * e).sqrt() * a.powf(1.5);
         let f = f.unwrap_or_else(|| panic!("contact lost at delta = {d}"));
-        assert!((f - expected).abs() < 1e-9 * (3.0 * PI * GAMMA * r), "a = {a}, delta = {d}: F = {f} vs {expected}");
+        assert!(
+            (f - expected).abs() < 1e-9 * (3.0 * PI * GAMMA * r),
+            "a = {a}, delta = {d}: F = {f} vs {expected}"
+        );
     }
 }
 
@@ -69,9 +76,16 @@ fn minimum_force_is_the_pull_off_force() {
     // From 2 um of overlap to 2.7 um of gap, in 0.1 nm steps (delta_c is about -2.76 um).
     let overlaps: Vec<f64> = (0..47_000).map(|k| 2e-6 - k as f64 * 1e-10).collect();
     let forces = path(&overlaps);
-    let min = forces.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+    let min = forces
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
     let pull_off = -3.0 * PI * GAMMA * r;
-    assert!((min - pull_off).abs() / pull_off.abs() < 1e-6, "minimum force {min} vs -3 pi gamma R* = {pull_off}");
+    assert!(
+        (min - pull_off).abs() / pull_off.abs() < 1e-6,
+        "minimum force {min} vs -3 pi gamma R* = {pull_off}"
+    );
 }
 
 #[test]
@@ -80,12 +94,25 @@ fn attraction_persists_to_the_critical_overlap_then_stops() {
     let a_c = (9.0 * PI * GAMMA * r * r / (2.0 * e) * (0.75 - 1.0 / 2f64.sqrt())).cbrt();
     let delta_c = a_c * a_c / r - (4.0 * PI * GAMMA * a_c / e).sqrt();
     assert!(delta_c < 0.0);
-    let overlaps = [1e-6, 0.0, 0.5 * delta_c, 0.999 * delta_c, 1.001 * delta_c, 0.5 * delta_c];
+    let overlaps = [
+        1e-6,
+        0.0,
+        0.5 * delta_c,
+        0.999 * delta_c,
+        1.001 * delta_c,
+        0.5 * delta_c,
+    ];
     let f = path(&overlaps);
-    assert!(f[1].unwrap() < 0.0 && f[2].unwrap() < 0.0 && f[3].unwrap() < 0.0, "attractive down to delta_c: {f:?}");
+    assert!(
+        f[1].unwrap() < 0.0 && f[2].unwrap() < 0.0 && f[3].unwrap() < 0.0,
+        "attractive down to delta_c: {f:?}"
+    );
     assert_eq!(f[4], None, "broken beyond delta_c");
     // Once broken, no force at a gap until the particles touch again (hysteresis).
-    assert_eq!(f[5], None, "no attraction across a gap before contact re-forms");
+    assert_eq!(
+        f[5], None,
+        "no attraction across a gap before contact re-forms"
+    );
     // Approaching from a gap: nothing until touching.
     let g = path(&[0.5 * delta_c, 1e-9]);
     assert_eq!(g[0], None);
@@ -100,6 +127,9 @@ fn zero_surface_energy_is_hertz() {
     let mut h = vec![0.0; m.history_stride()];
     let f0 = -m.evaluate(0, 0, &contact_at(1e-6), &mut h).unwrap().force.x;
     let hertz = 4.0 / 3.0 * e_eff() * r.sqrt() * 1e-6f64.powf(1.5);
-    assert!((f0 - hertz).abs() < 1e-10 * hertz, "gamma = 0 gives Hertz: {f0} vs {hertz}");
+    assert!(
+        (f0 - hertz).abs() < 1e-10 * hertz,
+        "gamma = 0 gives Hertz: {f0} vs {hertz}"
+    );
     assert!(f < f0, "adhesion lowers the force");
 }

@@ -13,14 +13,21 @@ use tilth_kernel::sim::Simulation;
 use tilth_kernel::wall::{Motion, Wall, plane::Plane};
 
 fn golden(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("golden/lammps").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("golden/lammps")
+        .join(name)
 }
 
 /// Columns of a golden CSV by header name.
 fn table(name: &str) -> HashMap<String, Vec<f64>> {
     let text = std::fs::read_to_string(golden(name)).unwrap();
     let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(str::to_string).collect();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
     let mut cols: HashMap<String, Vec<f64>> = header.iter().map(|h| (h.clone(), vec![])).collect();
     for l in lines {
         for (h, v) in header.iter().zip(l.split(',')) {
@@ -44,18 +51,31 @@ const DT: f64 = 1e-8;
 const ROW_STEPS: u64 = 100; // LAMMPS printed every 100 steps
 
 fn sim_for(e: f64, mu: f64, p: Particles, walls: Vec<Wall>) -> Simulation {
-    let m = model(&spec("hertz", Some("restitution"), Some("mindlin"), None), &[("restitution", e), ("friction", mu)]);
+    let m = model(
+        &spec("hertz", Some("restitution"), Some("mindlin"), None),
+        &[("restitution", e), ("friction", mu)],
+    );
     sim(m, p, walls, DT, DVec3::ZERO, 1)
 }
 
 fn floor() -> Wall {
-    Wall::new("floor", Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()), 0, Motion::Fixed)
+    Wall::new(
+        "floor",
+        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
+        0,
+        Motion::Fixed,
+    )
 }
 
 /// Largest |ours - LAMMPS| over the rows, relative to the largest |LAMMPS| value.
 fn compare(series: &[f64], ours: &[f64]) -> f64 {
     let scale = series.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    series.iter().zip(ours).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / scale
+    series
+        .iter()
+        .zip(ours)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / scale
 }
 
 #[test]
@@ -70,12 +90,22 @@ fn head_on_particle_particle_trajectories_match_lammps() {
             f.push(s.particles.force[0].x);
             s.run(ROW_STEPS).unwrap();
         }
-        let (dx, dv, df) = (compare(&g["x1"], &x), compare(&g["vx1"], &v), compare(&g["fx1"], &f));
+        let (dx, dv, df) = (
+            compare(&g["x1"], &x),
+            compare(&g["vx1"], &v),
+            compare(&g["fx1"], &f),
+        );
         eprintln!("pp e={e}: max rel diff x {dx:.1e}, v {dv:.1e}, F {df:.1e}");
-        assert!(dx < 1e-9 && dv < 1e-7 && df < 1e-6, "e = {e}: x {dx}, v {dv}, F {df}");
+        assert!(
+            dx < 1e-9 && dv < 1e-7 && df < 1e-6,
+            "e = {e}: x {dx}, v {dv}, F {df}"
+        );
         let rest = -(s.particles.velocity[0].x - s.particles.velocity[1].x) / 1.0;
         let lammps = summary(&format!("pp_headon_e{e}"), "restitution");
-        assert!((rest - lammps).abs() < 1e-7, "restitution {rest} vs LAMMPS {lammps}");
+        assert!(
+            (rest - lammps).abs() < 1e-7,
+            "restitution {rest} vs LAMMPS {lammps}"
+        );
     }
 }
 
@@ -84,7 +114,13 @@ fn head_on_particle_wall_trajectories_match_lammps() {
     for e in ["0.2", "0.45", "0.9"] {
         let g = table(&format!("pw_headon_e{e}.csv"));
         let mut p = Particles::default();
-        p.push(DVec3::new(0.0, 0.0, 1.05 * R), DVec3::new(0.0, 0.0, -0.5), R, RHO, 0);
+        p.push(
+            DVec3::new(0.0, 0.0, 1.05 * R),
+            DVec3::new(0.0, 0.0, -0.5),
+            R,
+            RHO,
+            0,
+        );
         let mut s = sim_for(e.parse().unwrap(), 0.3, p, vec![floor()]);
         let (mut z, mut v, mut f) = (vec![], vec![], vec![]);
         for _ in 0..g["time"].len() {
@@ -93,9 +129,16 @@ fn head_on_particle_wall_trajectories_match_lammps() {
             f.push(s.particles.force[0].z);
             s.run(ROW_STEPS).unwrap();
         }
-        let (dz, dv, df) = (compare(&g["z"], &z), compare(&g["vz"], &v), compare(&g["fz"], &f));
+        let (dz, dv, df) = (
+            compare(&g["z"], &z),
+            compare(&g["vz"], &v),
+            compare(&g["fz"], &f),
+        );
         eprintln!("pw e={e}: max rel diff z {dz:.1e}, v {dv:.1e}, F {df:.1e}");
-        assert!(dz < 1e-9 && dv < 1e-7 && df < 1e-6, "e = {e}: z {dz}, v {dv}, F {df}");
+        assert!(
+            dz < 1e-9 && dv < 1e-7 && df < 1e-6,
+            "e = {e}: z {dz}, v {dv}, F {df}"
+        );
     }
 }
 
@@ -110,29 +153,78 @@ fn head_on_particle_wall_trajectories_match_lammps() {
 #[test]
 fn oblique_impacts_match_lammps() {
     let mut p = Particles::default();
-    p.push(DVec3::new(0.0, 0.0, 1.05 * R), DVec3::new(0.3, 0.0, -0.5), R, RHO, 0);
+    p.push(
+        DVec3::new(0.0, 0.0, 1.05 * R),
+        DVec3::new(0.3, 0.0, -0.5),
+        R,
+        RHO,
+        0,
+    );
     let mut s = sim_for(0.45, 0.3, p, vec![floor()]);
     s.run(40_000).unwrap();
     let c = "pw_oblique_mu0.3_e0.45";
-    let (vx, vz, wy) = (s.particles.velocity[0].x, s.particles.velocity[0].z, s.particles.angular_velocity[0].y);
-    let (lx, lz, lw) = (summary(c, "vx_final"), summary(c, "vz_final"), summary(c, "omegay_final"));
+    let (vx, vz, wy) = (
+        s.particles.velocity[0].x,
+        s.particles.velocity[0].z,
+        s.particles.angular_velocity[0].y,
+    );
+    let (lx, lz, lw) = (
+        summary(c, "vx_final"),
+        summary(c, "vz_final"),
+        summary(c, "omegay_final"),
+    );
     eprintln!("wall oblique: vx {vx} vs {lx}, vz {vz} vs {lz}, wy {wy} vs {lw}");
-    assert!((vz - lz).abs() / lz < 1e-5, "normal rebound {vz} vs LAMMPS {lz}");
-    assert!((vx - lx).abs() / lx < 0.02, "tangential rebound {vx} vs LAMMPS {lx}");
+    assert!(
+        (vz - lz).abs() / lz < 1e-5,
+        "normal rebound {vz} vs LAMMPS {lz}"
+    );
+    assert!(
+        (vx - lx).abs() / lx < 0.02,
+        "tangential rebound {vx} vs LAMMPS {lx}"
+    );
     assert!((wy - lw).abs() / lw < 0.02, "spin {wy} vs LAMMPS {lw}");
 
     let mut p = Particles::default();
-    p.push(DVec3::new(-1.05 * R, 0.0, 0.0), DVec3::new(0.5, 0.2, 0.0), R, RHO, 0);
-    p.push(DVec3::new(1.05 * R, 0.0, 0.0), DVec3::new(-0.5, -0.2, 0.0), R, RHO, 0);
+    p.push(
+        DVec3::new(-1.05 * R, 0.0, 0.0),
+        DVec3::new(0.5, 0.2, 0.0),
+        R,
+        RHO,
+        0,
+    );
+    p.push(
+        DVec3::new(1.05 * R, 0.0, 0.0),
+        DVec3::new(-0.5, -0.2, 0.0),
+        R,
+        RHO,
+        0,
+    );
     let mut s = sim_for(0.45, 0.3, p, vec![]);
     s.run(40_000).unwrap();
     let c = "pp_oblique_mu0.3_e0.45";
-    let (vx, vy, wz) = (s.particles.velocity[0].x, s.particles.velocity[0].y, s.particles.angular_velocity[0].z);
-    let (lx, ly, lw) = (summary(c, "vx1_final"), summary(c, "vy1_final"), summary(c, "omegaz1_final"));
+    let (vx, vy, wz) = (
+        s.particles.velocity[0].x,
+        s.particles.velocity[0].y,
+        s.particles.angular_velocity[0].z,
+    );
+    let (lx, ly, lw) = (
+        summary(c, "vx1_final"),
+        summary(c, "vy1_final"),
+        summary(c, "omegaz1_final"),
+    );
     eprintln!("pair oblique: vx {vx} vs {lx}, vy {vy} vs {ly}, wz {wz} vs {lw}");
-    assert!((vx - lx).abs() / lx.abs() < 1e-3, "normal rebound {vx} vs LAMMPS {lx}");
-    assert!((vy - ly).abs() / ly.abs() < 0.02, "tangential rebound {vy} vs LAMMPS {ly}");
-    assert!((wz - lw).abs() / lw.abs() < 0.02, "spin {wz} vs LAMMPS {lw}");
+    assert!(
+        (vx - lx).abs() / lx.abs() < 1e-3,
+        "normal rebound {vx} vs LAMMPS {lx}"
+    );
+    assert!(
+        (vy - ly).abs() / ly.abs() < 0.02,
+        "tangential rebound {vy} vs LAMMPS {ly}"
+    );
+    assert!(
+        (wz - lw).abs() / lw.abs() < 0.02,
+        "spin {wz} vs LAMMPS {lw}"
+    );
 }
 
 /// LAMMPS `jkr` gives the same pull-off force, 3 pi gamma R* (gamma per surface).
@@ -141,8 +233,16 @@ fn jkr_pull_off_matches_lammps() {
     let lammps = summary("pp_jkr_pulloff", "min_force_n");
     let ours = -3.0 * std::f64::consts::PI * 0.356 * (R / 2.0);
     let jkr = tilth_kernel::contact::laws::jkr::Jkr::new(1.0 / (2.0 * (1.0 - NU * NU) / E), 0.356);
-    let a = (9.0 * std::f64::consts::PI * 0.356 * (R / 2.0f64).powi(2) / (4.0 * 1.0 / (2.0 * (1.0 - NU * NU) / E))).cbrt();
+    let a = (9.0 * std::f64::consts::PI * 0.356 * (R / 2.0f64).powi(2)
+        / (4.0 * 1.0 / (2.0 * (1.0 - NU * NU) / E)))
+        .cbrt();
     let f_min = jkr.force_at_radius(a, R / 2.0);
-    assert!((lammps - ours).abs() / ours.abs() < 1e-6, "LAMMPS pull-off {lammps} vs 3 pi gamma R* {ours}");
-    assert!((f_min - lammps).abs() / lammps.abs() < 1e-6, "tilth minimum {f_min} vs LAMMPS {lammps}");
+    assert!(
+        (lammps - ours).abs() / ours.abs() < 1e-6,
+        "LAMMPS pull-off {lammps} vs 3 pi gamma R* {ours}"
+    );
+    assert!(
+        (f_min - lammps).abs() / lammps.abs() < 1e-6,
+        "tilth minimum {f_min} vs LAMMPS {lammps}"
+    );
 }

@@ -11,7 +11,10 @@ use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric, mesh::Mesh, p
 const E_REST: f64 = 0.45;
 
 fn frictionless() -> tilth_kernel::contact::ContactModel {
-    model(&spec("hertz", Some("restitution"), None, None), &[("restitution", E_REST)])
+    model(
+        &spec("hertz", Some("restitution"), None, None),
+        &[("restitution", E_REST)],
+    )
 }
 
 fn one(x: DVec3, v: DVec3) -> Particles {
@@ -28,21 +31,43 @@ fn bounce(wall: Wall, x: DVec3, v: DVec3) -> Simulation {
 
 #[test]
 fn disc_rebounds_with_restitution() {
-    let w = Wall::new("disc", Box::new(Axisymmetric::disc(DVec3::ZERO, DVec3::Z, 0.01).unwrap()), 0, Motion::Fixed);
-    let s = bounce(w, DVec3::new(0.003, 0.0, 1.02 * R), DVec3::new(0.0, 0.0, -0.5));
+    let w = Wall::new(
+        "disc",
+        Box::new(Axisymmetric::disc(DVec3::ZERO, DVec3::Z, 0.01).unwrap()),
+        0,
+        Motion::Fixed,
+    );
+    let s = bounce(
+        w,
+        DVec3::new(0.003, 0.0, 1.02 * R),
+        DVec3::new(0.0, 0.0, -0.5),
+    );
     let v = s.particles.velocity[0];
-    assert!((v.z / 0.5 - E_REST).abs() < 1e-3 && v.x.abs() < 1e-12, "disc rebound {v:?}");
+    assert!(
+        (v.z / 0.5 - E_REST).abs() < 1e-3 && v.x.abs() < 1e-12,
+        "disc rebound {v:?}"
+    );
 }
 
 #[test]
 fn cylinder_confines_from_inside_and_deflects_from_outside() {
-    let cyl = || Box::new(Axisymmetric::cylinder(DVec3::new(0.0, 0.0, -0.01), DVec3::Z, 0.01, 0.02).unwrap());
+    let cyl = || {
+        Box::new(Axisymmetric::cylinder(DVec3::new(0.0, 0.0, -0.01), DVec3::Z, 0.01, 0.02).unwrap())
+    };
     // Inside, moving radially outward toward the wall at x = 0.01.
-    let s = bounce(Wall::new("mould", cyl(), 0, Motion::Fixed), DVec3::new(0.01 - 1.02 * R, 0.0, 0.0), DVec3::new(0.5, 0.0, 0.0));
+    let s = bounce(
+        Wall::new("mould", cyl(), 0, Motion::Fixed),
+        DVec3::new(0.01 - 1.02 * R, 0.0, 0.0),
+        DVec3::new(0.5, 0.0, 0.0),
+    );
     let v = s.particles.velocity[0];
     assert!((-v.x / 0.5 - E_REST).abs() < 1e-3, "inside rebound {v:?}");
     // Outside, moving radially inward.
-    let s = bounce(Wall::new("post", cyl(), 0, Motion::Fixed), DVec3::new(0.01 + 1.02 * R, 0.0, 0.0), DVec3::new(-0.5, 0.0, 0.0));
+    let s = bounce(
+        Wall::new("post", cyl(), 0, Motion::Fixed),
+        DVec3::new(0.01 + 1.02 * R, 0.0, 0.0),
+        DVec3::new(-0.5, 0.0, 0.0),
+    );
     let v = s.particles.velocity[0];
     assert!((v.x / 0.5 - E_REST).abs() < 1e-3, "outside rebound {v:?}");
 }
@@ -59,25 +84,43 @@ fn cone_frustum_reflects_about_its_surface_normal() {
     let surface = DVec3::new(r0 + slope * z, 0.0, z);
     let x = surface + n * 1.02 * R;
     let v_in = -n * 0.5;
-    let s = bounce(Wall::new("funnel", Box::new(cone), 0, Motion::Fixed), x, v_in);
+    let s = bounce(
+        Wall::new("funnel", Box::new(cone), 0, Motion::Fixed),
+        x,
+        v_in,
+    );
     let v = s.particles.velocity[0];
-    assert!((v.dot(n) / 0.5 - E_REST).abs() < 1e-3 && (v - n * v.dot(n)).length() < 1e-9, "cone rebound {v:?}");
+    assert!(
+        (v.dot(n) / 0.5 - E_REST).abs() < 1e-3 && (v - n * v.dot(n)).length() < 1e-9,
+        "cone rebound {v:?}"
+    );
 }
 
 fn square_mesh() -> Mesh {
     // A 20 mm square at z = 0 as two triangles sharing the diagonal.
-    let (a, b, c, d) = (DVec3::new(-0.01, -0.01, 0.0), DVec3::new(0.01, -0.01, 0.0), DVec3::new(0.01, 0.01, 0.0), DVec3::new(-0.01, 0.01, 0.0));
+    let (a, b, c, d) = (
+        DVec3::new(-0.01, -0.01, 0.0),
+        DVec3::new(0.01, -0.01, 0.0),
+        DVec3::new(0.01, 0.01, 0.0),
+        DVec3::new(-0.01, 0.01, 0.0),
+    );
     Mesh::new(vec![[a, b, c], [a, c, d]])
 }
 
 #[test]
 fn mesh_seam_is_counted_once() {
     // Land exactly on the shared diagonal and next to it: each bounce must equal a plane's.
-    for x in [DVec3::new(0.0, 0.0, 1.02 * R), DVec3::new(0.0004, 0.0, 1.02 * R)] {
+    for x in [
+        DVec3::new(0.0, 0.0, 1.02 * R),
+        DVec3::new(0.0004, 0.0, 1.02 * R),
+    ] {
         let w = Wall::new("mesh", Box::new(square_mesh()), 0, Motion::Fixed);
         let s = bounce(w, x, DVec3::new(0.0, 0.0, -0.5));
         let v = s.particles.velocity[0];
-        assert!((v.z / 0.5 - E_REST).abs() < 1e-3 && v.x.abs() < 1e-9 && v.y.abs() < 1e-9, "seam rebound at {x:?}: {v:?}");
+        assert!(
+            (v.z / 0.5 - E_REST).abs() < 1e-3 && v.x.abs() < 1e-9 && v.y.abs() < 1e-9,
+            "seam rebound at {x:?}: {v:?}"
+        );
     }
 }
 
@@ -95,23 +138,50 @@ fn stl_file_loads_and_concave_corner_pushes_on_both_faces() {
         s + " endloop\nendfacet\n"
     };
     let mut text = "solid corner\n".to_string();
-    text += &facet([0.0, 0.0, 1.0], [[0.0, -10.0, 0.0], [10.0, -10.0, 0.0], [10.0, 10.0, 0.0]]);
-    text += &facet([0.0, 0.0, 1.0], [[0.0, -10.0, 0.0], [10.0, 10.0, 0.0], [0.0, 10.0, 0.0]]);
-    text += &facet([1.0, 0.0, 0.0], [[0.0, -10.0, 0.0], [0.0, 10.0, 10.0], [0.0, -10.0, 10.0]]);
-    text += &facet([1.0, 0.0, 0.0], [[0.0, -10.0, 0.0], [0.0, 10.0, 0.0], [0.0, 10.0, 10.0]]);
+    text += &facet(
+        [0.0, 0.0, 1.0],
+        [[0.0, -10.0, 0.0], [10.0, -10.0, 0.0], [10.0, 10.0, 0.0]],
+    );
+    text += &facet(
+        [0.0, 0.0, 1.0],
+        [[0.0, -10.0, 0.0], [10.0, 10.0, 0.0], [0.0, 10.0, 0.0]],
+    );
+    text += &facet(
+        [1.0, 0.0, 0.0],
+        [[0.0, -10.0, 0.0], [0.0, 10.0, 10.0], [0.0, -10.0, 10.0]],
+    );
+    text += &facet(
+        [1.0, 0.0, 0.0],
+        [[0.0, -10.0, 0.0], [0.0, 10.0, 0.0], [0.0, 10.0, 10.0]],
+    );
     text += "endsolid corner\n";
     std::fs::write(&path, text).unwrap();
     let mesh = Mesh::from_stl(&path, 1e-3).unwrap();
     assert_eq!(mesh.triangles.len(), 4);
     // A sphere resting in the corner under gravity pointing into it: both faces carry load.
     let g = DVec3::new(-1.0, 0.0, -1.0).normalize() * 9.81;
-    let mut s = sim(frictionless(), one(DVec3::new(R, 0.0, R), DVec3::ZERO), vec![Wall::new("corner", Box::new(mesh), 0, Motion::Fixed)], 1e-6, g, 1);
+    let mut s = sim(
+        frictionless(),
+        one(DVec3::new(R, 0.0, R), DVec3::ZERO),
+        vec![Wall::new("corner", Box::new(mesh), 0, Motion::Fixed)],
+        1e-6,
+        g,
+        1,
+    );
     s.run(30_000).unwrap();
     let f = s.walls[0].force;
     let weight = s.particles.mass[0] * 9.81;
     // The wall carries the weight along g, split equally between the two faces.
-    assert!((f - g.normalize() * weight).length() < 1e-3 * weight, "corner force {f:?} vs weight {weight}");
-    assert!(Mesh::from_stl(&dir.join("missing.stl"), 1.0).unwrap_err().to_string().contains("missing.stl"));
+    assert!(
+        (f - g.normalize() * weight).length() < 1e-3 * weight,
+        "corner force {f:?} vs weight {weight}"
+    );
+    assert!(
+        Mesh::from_stl(&dir.join("missing.stl"), 1.0)
+            .unwrap_err()
+            .to_string()
+            .contains("missing.stl")
+    );
 }
 
 #[test]
@@ -119,34 +189,81 @@ fn servo_platen_holds_its_target_force() {
     // One sphere on a floor under a servo platen pressing down with 0.05 N: both contacts
     // carry the target, so the overlap at each is Hertz's (3F / (4 E* sqrt(R)))^(2/3).
     let target = 0.05;
-    let floor = Wall::new("floor", Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()), 0, Motion::Fixed);
+    let floor = Wall::new(
+        "floor",
+        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
+        0,
+        Motion::Fixed,
+    );
     let platen = Wall::new(
         "platen",
         Box::new(Plane::new(DVec3::new(0.0, 0.0, 2.0 * R + 1e-5), -DVec3::Z).unwrap()),
         0,
-        Motion::Servo { axis: -DVec3::Z, target_force: target, gain: 2.0, max_speed: 0.01 },
+        Motion::Servo {
+            axis: -DVec3::Z,
+            target_force: target,
+            gain: 2.0,
+            max_speed: 0.01,
+        },
     );
-    let mut s = sim(frictionless(), one(DVec3::new(0.0, 0.0, R), DVec3::ZERO), vec![floor, platen], 1e-6, DVec3::ZERO, 1);
+    let mut s = sim(
+        frictionless(),
+        one(DVec3::new(0.0, 0.0, R), DVec3::ZERO),
+        vec![floor, platen],
+        1e-6,
+        DVec3::ZERO,
+        1,
+    );
     s.run(200_000).unwrap();
     let f = s.walls[1].force.z;
-    assert!((f - target).abs() / target < 1e-3, "platen force {f} vs target {target}");
+    assert!(
+        (f - target).abs() / target < 1e-3,
+        "platen force {f} vs target {target}"
+    );
     let e_eff = 1.0 / (2.0 * (1.0 - NU * NU) / E);
     let delta = (3.0 * target / (4.0 * e_eff * R.sqrt())).powf(2.0 / 3.0);
     let gap = 2.0 * R + 1e-5 + s.walls[1].offset.z; // platen height
-    assert!((2.0 * R - gap - 2.0 * delta).abs() < 1e-3 * delta, "platen at {gap}, two Hertz overlaps {delta}");
+    assert!(
+        (2.0 * R - gap - 2.0 * delta).abs() < 1e-3 * delta,
+        "platen at {gap}, two Hertz overlaps {delta}"
+    );
 }
 
 #[test]
 fn prescribed_motion_moves_the_wall_and_records_force_and_torque() {
     let v = DVec3::new(0.0, 0.0, 0.01);
-    let lift = Wall::new("lift", Box::new(Plane::new(DVec3::new(0.0, 0.0, 0.0), DVec3::Z).unwrap()), 0, Motion::Velocity(v));
-    let mut s = sim(frictionless(), one(DVec3::new(0.003, 0.0, R), DVec3::ZERO), vec![lift], 1e-6, DVec3::new(0.0, 0.0, -9.81), 1);
+    let lift = Wall::new(
+        "lift",
+        Box::new(Plane::new(DVec3::new(0.0, 0.0, 0.0), DVec3::Z).unwrap()),
+        0,
+        Motion::Velocity(v),
+    );
+    let mut s = sim(
+        frictionless(),
+        one(DVec3::new(0.003, 0.0, R), DVec3::ZERO),
+        vec![lift],
+        1e-6,
+        DVec3::new(0.0, 0.0, -9.81),
+        1,
+    );
     s.run(50_000).unwrap();
     assert!((s.walls[0].offset - v * s.time).length() < 1e-12);
     // The lift carries the sphere upward at its speed; its force is the weight, and the
     // torque about the plane's reference point (origin) is r x F at x = 3 mm.
     let w = s.particles.mass[0] * 9.81;
-    assert!((s.particles.velocity[0].z - 0.01).abs() < 1e-4, "{:?}", s.particles.velocity[0]);
-    assert!((s.walls[0].force.z + w).abs() < 1e-2 * w, "force {:?}", s.walls[0].force);
-    assert!((s.walls[0].torque.y - 0.003 * w).abs() < 1e-2 * 0.003 * w, "torque {:?}", s.walls[0].torque);
+    assert!(
+        (s.particles.velocity[0].z - 0.01).abs() < 1e-4,
+        "{:?}",
+        s.particles.velocity[0]
+    );
+    assert!(
+        (s.walls[0].force.z + w).abs() < 1e-2 * w,
+        "force {:?}",
+        s.walls[0].force
+    );
+    assert!(
+        (s.walls[0].torque.y - 0.003 * w).abs() < 1e-2 * 0.003 * w,
+        "torque {:?}",
+        s.walls[0].torque
+    );
 }

@@ -25,7 +25,11 @@ impl CellGrid {
             hi = DVec3::ZERO;
         }
         // A zero or non-finite cell (no particles yet) would never satisfy the cap below.
-        let min_cell = if min_cell > 0.0 && min_cell.is_finite() { min_cell } else { 1.0 };
+        let min_cell = if min_cell > 0.0 && min_cell.is_finite() {
+            min_cell
+        } else {
+            1.0
+        };
         let extent = (hi - lo).max(DVec3::splat(min_cell));
         let mut cell = min_cell;
         let max_cells = (4 * points.len()).max(64) as f64;
@@ -63,6 +67,11 @@ impl CellGrid {
             fill[c as usize] += 1;
         }
         grid
+    }
+
+    /// Every binned index, cell by cell: a spatially coherent order for the particles.
+    pub fn cell_order(&self) -> &[u32] {
+        &self.items
     }
 
     #[inline]

@@ -4,7 +4,9 @@ use super::{CHUNK, CellGrid};
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// Pairs (i, j), i < j, whose surfaces are closer than `extra` (skin + reach), grouped by i in
+/// Pairs (i, j) whose surfaces are closer than `extra` (skin + reach), listed once, in the row
+/// of the particle with the smaller id (ids never change, indices do when particles are
+/// reordered, so a contact keeps its orientation and its history's sign), grouped by i in
 /// ascending j. Each pair owns a history row of `stride` f64 values.
 #[derive(Debug, Clone, Default)]
 pub struct PairList {
@@ -44,8 +46,16 @@ impl PairList {
     }
 
     /// Rebuilds the list for the current positions, carrying over the history of every pair
-    /// that was already listed. Run inside the simulation's thread pool.
-    pub fn rebuild(&mut self, position: &[DVec3], radius: &[f64], extra: f64) {
+    /// that was already listed. `old_of_new[k]` is the index particle k had when the old list
+    /// was built (`None`: unchanged). Run inside the simulation's thread pool.
+    pub fn rebuild(
+        &mut self,
+        position: &[DVec3],
+        radius: &[f64],
+        id: &[u32],
+        extra: f64,
+        old_of_new: Option<&[u32]>,
+    ) {
         let n = position.len();
         let r_max = radius.iter().copied().fold(0.0, f64::max);
         let grid = CellGrid::build(position, 2.0 * r_max + extra);
@@ -66,7 +76,7 @@ impl PairList {
                     let (pi, ri) = (position[i], radius[i]);
                     grid.for_each_near(pi, |j| {
                         let ju = j as usize;
-                        if ju > i {
+                        if id[ju] > id[i] {
                             let cut = ri + radius[ju] + extra;
                             if (position[ju] - pi).length_squared() < cut * cut {
                                 near.push(j);
@@ -75,22 +85,33 @@ impl PairList {
                     });
                     near.sort_unstable();
                     out.counts.push(near.len() as u32);
-                    // Carry history: merge this row with the old row of i (both ascending in j).
-                    let old_row = if i + 1 < old.row_start.len() {
-                        old.row_start[i] as usize..old.row_start[i + 1] as usize
+                    // Carry history from the old row of the same particle. Without a reorder
+                    // both rows ascend in j and merge; after one, look each partner up.
+                    let oi = old_of_new.map_or(i, |m| m[i] as usize);
+                    let old_row = if oi + 1 < old.row_start.len() {
+                        old.row_start[oi] as usize..old.row_start[oi + 1] as usize
                     } else {
                         0..0
                     };
                     let mut k = old_row.start;
                     for &j in &near {
-                        while k < old_row.end && old.j[k] < j {
-                            k += 1;
-                        }
-                        if k < old_row.end && old.j[k] == j {
-                            out.history
-                                .extend_from_slice(&old.history[k * stride..(k + 1) * stride]);
-                        } else {
-                            out.history.extend(std::iter::repeat_n(0.0, stride));
+                        let found = match old_of_new {
+                            None => {
+                                while k < old_row.end && old.j[k] < j {
+                                    k += 1;
+                                }
+                                (k < old_row.end && old.j[k] == j).then_some(k)
+                            }
+                            Some(m) => {
+                                let oj = m[j as usize];
+                                old_row.clone().find(|&q| old.j[q] == oj)
+                            }
+                        };
+                        match found {
+                            Some(q) => out
+                                .history
+                                .extend_from_slice(&old.history[q * stride..(q + 1) * stride]),
+                            None => out.history.extend(std::iter::repeat_n(0.0, stride)),
                         }
                     }
                     out.j.extend_from_slice(&near);

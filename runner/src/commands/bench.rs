@@ -137,7 +137,10 @@ fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
     let mut sim = Simulation::new(settling_bed_setup(args)?)?;
     let setup = t0.elapsed().as_secs_f64();
     let n = sim.particles.len();
-    eprintln!("settling-bed: placed {n} particles in {setup:.2} s; stepping {} steps", args.steps);
+    eprintln!(
+        "settling-bed: placed {n} particles in {setup:.2} s; stepping {} steps",
+        args.steps
+    );
     for w in &sim.warnings {
         eprintln!("warning: {w}");
     }
@@ -161,13 +164,29 @@ fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
     writeln!(out, "setup seconds: {setup:.3}")?;
     writeln!(out, "wall seconds: {secs:.3}")?;
     writeln!(out, "neighbour rebuilds: {}", sim.rebuilds)?;
-    writeln!(out, "final kinetic energy: {:.4e} J", sim.particles.kinetic_energy())?;
-    writeln!(out, "heap bytes per particle: {:.0}", sim.heap_bytes() as f64 / n_div)?;
+    writeln!(
+        out,
+        "final kinetic energy: {:.4e} J",
+        sim.particles.kinetic_energy()
+    )?;
+    writeln!(
+        out,
+        "heap bytes per particle: {:.0}",
+        sim.heap_bytes() as f64 / n_div
+    )?;
     match peak_rss_kb() {
-        Some(kb) => writeln!(out, "peak RSS per particle: {:.3} kB ({kb} kB total)", kb as f64 / n_div)?,
+        Some(kb) => writeln!(
+            out,
+            "peak RSS per particle: {:.3} kB ({kb} kB total)",
+            kb as f64 / n_div
+        )?,
         None => writeln!(out, "peak RSS per particle: unknown (no /proc/self/status)")?,
     }
-    writeln!(out, "particle-steps/s: {:.3e}", n as f64 * sim.step as f64 / secs.max(1e-12))?;
+    writeln!(
+        out,
+        "particle-steps/s: {:.3e}",
+        n as f64 * sim.step as f64 / secs.max(1e-12)
+    )?;
     Ok(())
 }
 

@@ -19,7 +19,8 @@ pub fn laws(out: &mut dyn Write) -> Result<()> {
         out,
         "Contact laws. [contact] names the law of each slot (e.g. normal = \"jkr\");\n\
          each [[pairs]] entry gives the parameters of all chosen laws for one material pair.\n\
-         A cohesive law needs tangential and rolling laws that allow cohesion."
+         A cohesive law needs tangential and rolling laws that allow cohesion.\n\
+         Parameter lines read: key, unit, allowed range, default, meaning."
     )?;
     for (slot, what) in SLOTS {
         writeln!(out, "\n[contact] {} ({what})", slot.name())?;

@@ -170,17 +170,29 @@ impl RunReport {
 
     /// The plain-text summary.
     pub fn write_text(&self, out: &mut dyn Write) -> io::Result<()> {
-        let walls: Vec<String> = self.walls.iter().map(|w| format!("{} ({})", w.name, w.kind)).collect();
+        let walls: Vec<String> = self
+            .walls
+            .iter()
+            .map(|w| format!("{} ({})", w.name, w.kind))
+            .collect();
         writeln!(out, "scene               {}", self.scene)?;
         writeln!(
             out,
-            "simulated           {} particles of {}; laws {}; walls {}",
+            "simulated           {} particles; materials {}; laws {}; walls {}",
             self.particles,
             self.materials.join(", "),
             self.laws.join(" + "),
-            if walls.is_empty() { "none".into() } else { walls.join(", ") }
+            if walls.is_empty() {
+                "none".into()
+            } else {
+                walls.join(", ")
+            }
         )?;
-        writeln!(out, "steps               {} x {:.3e} s = {:.6} s simulated", self.steps, self.dt, self.simulated_time)?;
+        writeln!(
+            out,
+            "steps               {} x {:.3e} s = {:.6} s simulated",
+            self.steps, self.dt, self.simulated_time
+        )?;
         writeln!(
             out,
             "wall time           {:.3} s stepping ({} thread{}), {:.3} s setup",
@@ -189,7 +201,11 @@ impl RunReport {
             if self.threads == 1 { "" } else { "s" },
             self.setup_seconds
         )?;
-        writeln!(out, "speed               {:.3e} particle-steps/s", self.particle_steps_per_second)?;
+        writeln!(
+            out,
+            "speed               {:.3e} particle-steps/s",
+            self.particle_steps_per_second
+        )?;
         writeln!(
             out,
             "kinetic energy      {:.4e} J ({:.4e} J rotational), fastest particle {:.3e} m/s",
@@ -204,7 +220,11 @@ impl RunReport {
         writeln!(out, "neighbour rebuilds  {}", self.neighbour_rebuilds)?;
         for w in &self.walls {
             let [x, y, z] = w.force;
-            write!(out, "wall {:<14} force ({x:.4e}, {y:.4e}, {z:.4e}) N", w.name)?;
+            write!(
+                out,
+                "wall {:<14} force ({x:.4e}, {y:.4e}, {z:.4e}) N",
+                w.name
+            )?;
             match w.weight_fraction {
                 Some(r) => writeln!(out, "; along gravity {r:.4} x total weight")?,
                 None => writeln!(out)?,
@@ -214,12 +234,18 @@ impl RunReport {
             writeln!(out, "factory {k:<11} created {} of {}", f.created, f.count)?;
         }
         if !self.samples.is_empty() {
-            writeln!(out, "samples             time/s  particles  contacts  kinetic energy/J")?;
+            writeln!(
+                out,
+                "samples             time/s  particles  contacts  kinetic energy/J"
+            )?;
             for s in &self.samples {
                 writeln!(
                     out,
-                    "                    {:<7.4} {:>9} {:>9}  {:.4e}",
-                    s.time, s.particles, s.contacts, s.kinetic_energy
+                    "                    {:<7} {:>9} {:>9}  {:.4e}",
+                    short(s.time),
+                    s.particles,
+                    s.contacts,
+                    s.kinetic_energy
                 )?;
             }
         }
@@ -228,4 +254,10 @@ impl RunReport {
         }
         Ok(())
     }
+}
+
+/// `t` to 6 significant digits, without trailing zeros (0.15, 2e-5).
+fn short(t: f64) -> String {
+    let rounded: f64 = format!("{t:.5e}").parse().unwrap_or(t);
+    format!("{rounded}")
 }

@@ -28,10 +28,10 @@ pub fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
     let t0 = Instant::now();
     let loaded = config::load_or_demo(args.file.as_ref(), args.threads.map(|t| t as usize))?;
     let setup_seconds = t0.elapsed().as_secs_f64();
-    for w in loaded.warnings.iter().chain(&loaded.sim.warnings) {
+    for w in &loaded.sim.warnings {
         eprintln!("warning: {}: {w}", loaded.info.origin);
     }
-    let shown = loaded.warnings.len() + loaded.sim.warnings.len();
+    let shown = loaded.sim.warnings.len();
     let report = simulate(loaded, !args.quiet, setup_seconds)?;
     for w in report.warnings.iter().skip(shown) {
         eprintln!("warning: {}: {w}", report.scene);
@@ -47,11 +47,14 @@ pub fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
 
 /// Steps the loaded scene to the end, recording samples; a kernel failure comes back as
 /// the error (with the scene's name).
-pub fn simulate(loaded: config::Loaded, show_progress: bool, setup_seconds: f64) -> Result<RunReport> {
+pub fn simulate(
+    loaded: config::Loaded,
+    show_progress: bool,
+    setup_seconds: f64,
+) -> Result<RunReport> {
     let config::Loaded {
         mut sim,
         threads,
-        warnings,
         steps,
         sample_every,
         info,
@@ -77,7 +80,13 @@ pub fn simulate(loaded: config::Loaded, show_progress: bool, setup_seconds: f64)
     }
     let wall_seconds = start.elapsed().as_secs_f64();
     progress.finish();
-    let mut report = RunReport::new(&sim, &info, threads, setup_seconds, wall_seconds, particle_steps, samples);
-    report.warnings.splice(0..0, warnings);
-    Ok(report)
+    Ok(RunReport::new(
+        &sim,
+        &info,
+        threads,
+        setup_seconds,
+        wall_seconds,
+        particle_steps,
+        samples,
+    ))
 }

@@ -5,7 +5,6 @@ use anyhow::{Context, Result, bail};
 use serde::Deserialize;
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::material::Material;
-use tilth_kernel::particles::Particles;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -72,7 +71,11 @@ pub fn factory_seed(seed: u64, k: usize) -> u64 {
     z ^ (z >> 31)
 }
 
-pub fn resolve(sections: &[FactorySection], materials: &[Material], seed: u64) -> Result<Vec<Factory>> {
+pub fn resolve(
+    sections: &[FactorySection],
+    materials: &[Material],
+    seed: u64,
+) -> Result<Vec<Factory>> {
     let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
     let mut out = vec![];
     for (k, f) in sections.iter().enumerate() {
@@ -86,7 +89,10 @@ pub fn resolve(sections: &[FactorySection], materials: &[Material], seed: u64) -
             None => f64::INFINITY,
         };
         if f.sizes.is_empty() {
-            bail!("{} is empty; give at least one {{ diameter, fraction }}", key("sizes"));
+            bail!(
+                "{} is empty; give at least one {{ diameter, fraction }}",
+                key("sizes")
+            );
         }
         let mut sizes = vec![];
         for (c, s) in f.sizes.iter().enumerate() {
@@ -96,13 +102,23 @@ pub fn resolve(sections: &[FactorySection], materials: &[Material], seed: u64) -
         }
         let region = match f.region {
             RegionSection::Box { min, max } => {
-                let (lo, hi) = (check::vec3(&key("region.min"), min)?, check::vec3(&key("region.max"), max)?);
+                let (lo, hi) = (
+                    check::vec3(&key("region.min"), min)?,
+                    check::vec3(&key("region.max"), max)?,
+                );
                 if !lo.cmplt(hi).all() {
-                    bail!("{}: min {min:?} must lie below max {max:?} on every axis", key("region"));
+                    bail!(
+                        "{}: min {min:?} must lie below max {max:?} on every axis",
+                        key("region")
+                    );
                 }
                 Region::Box { min: lo, max: hi }
             }
-            RegionSection::Cylinder { base, radius, height } => Region::Cylinder {
+            RegionSection::Cylinder {
+                base,
+                radius,
+                height,
+            } => Region::Cylinder {
                 base: check::vec3(&key("region.base"), base)?,
                 radius: check::positive(&key("region.radius"), radius, "m")?,
                 height: check::positive(&key("region.height"), height, "m")?,
@@ -126,38 +142,4 @@ pub fn resolve(sections: &[FactorySection], materials: &[Material], seed: u64) -
         out.push(Factory::new(spec).with_context(|| format!("factories[{k}]"))?);
     }
     Ok(out)
-}
-
-/// Works around a kernel hang: `Simulation::new` never returns when it starts with no
-/// particles (its overlap check bins zero points into cells of size 0). When the scene has no
-/// explicit particles, this lets the factory that starts first create its first particle
-/// (or, for an all-at-once factory, its whole batch) before the simulation is built. For an
-/// all-at-once factory starting at t = 0 that is exactly what the kernel would do; otherwise
-/// the particle appears up to 1.5/rate + start_time early, and a note says so when that is
-/// more than [`PRIME_NOTE_AFTER`].
-pub const PRIME_NOTE_AFTER: f64 = 1e-3;
-
-pub fn prime(particles: &mut Particles, factories: &mut [Factory]) -> Result<Option<String>> {
-    if !particles.is_empty() {
-        return Ok(None);
-    }
-    let first_due = |f: &Factory| f.spec.start_time + 1.5 / f.spec.rate;
-    let Some((k, f)) = factories
-        .iter_mut()
-        .enumerate()
-        .min_by(|a, b| first_due(a.1).total_cmp(&first_due(b.1)))
-    else {
-        bail!("the scene has no particles: add [[particles]] or [[factories]]");
-    };
-    let t = first_due(f);
-    f.insert(t, particles);
-    if particles.is_empty() {
-        bail!("factories[{k}] cannot place its first particle: its region is too small or full");
-    }
-    Ok((t > PRIME_NOTE_AFTER).then(|| {
-        format!(
-            "factories[{k}] created {} particle(s) at t = 0 that were due at t = {t:.3e} s (a work-around: the kernel cannot start without particles)",
-            particles.len()
-        )
-    }))
 }

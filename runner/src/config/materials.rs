@@ -28,12 +28,10 @@ pub fn resolve(sections: &BTreeMap<String, MaterialSection>) -> Result<Vec<Mater
     for (name, m) in sections {
         let mat = match (m.youngs_modulus, m.shear_modulus) {
             (Some(e), None) => Material::new(name, e, m.poisson_ratio, m.density)?,
-            (None, Some(g)) => {
-                Material::from_shear_modulus(name, g, m.poisson_ratio, m.density)?
+            (None, Some(g)) => Material::from_shear_modulus(name, g, m.poisson_ratio, m.density)?,
+            _ => {
+                bail!("materials.{name}: give exactly one of youngs_modulus and shear_modulus (Pa)")
             }
-            _ => bail!(
-                "materials.{name}: give exactly one of youngs_modulus and shear_modulus (Pa)"
-            ),
         };
         out.push(mat);
     }

@@ -77,8 +77,6 @@ pub struct SceneInfo {
     pub laws: Vec<String>,
     /// (name, type) of every wall.
     pub walls: Vec<(String, &'static str)>,
-    pub factories: usize,
-    pub explicit_particles: usize,
 }
 
 /// A scene ready to run.
@@ -87,8 +85,6 @@ pub struct Loaded {
     /// Worker threads the simulation uses.
     pub threads: usize,
     pub steps: u64,
-    /// Notes about the set-up worth showing (besides the kernel's `sim.warnings`).
-    pub warnings: Vec<String>,
     /// Steps between recorded samples (`output.every`).
     pub sample_every: Option<u64>,
     pub info: SceneInfo,
@@ -110,12 +106,10 @@ pub fn load_str(
     base_dir: &Path,
     threads: Option<usize>,
 ) -> Result<Loaded> {
-    let mut loaded = build(text, base_dir, threads).with_context(|| origin.to_string())?;
-    loaded.info.origin = origin.to_string();
-    Ok(loaded)
+    build(text, origin, base_dir, threads).with_context(|| origin.to_string())
 }
 
-fn build(text: &str, base_dir: &Path, threads: Option<usize>) -> Result<Loaded> {
+fn build(text: &str, origin: &str, base_dir: &Path, threads: Option<usize>) -> Result<Loaded> {
     let probe: VersionProbe = toml::from_str(text)?;
     match probe.format_version {
         None => bail!(
@@ -127,12 +121,13 @@ fn build(text: &str, base_dir: &Path, threads: Option<usize>) -> Result<Loaded> 
         ),
     }
     let scene: Scene = toml::from_str(text)?;
-    scene.resolve(base_dir, threads)
+    scene.resolve(origin, base_dir, threads)
 }
 
 impl Scene {
-    /// Checks every value and builds the simulation.
-    pub fn resolve(self, base_dir: &Path, threads: Option<usize>) -> Result<Loaded> {
+    /// Checks every value and builds the simulation. `origin` names the scene in the summary;
+    /// mesh files are looked up relative to `base_dir`.
+    pub fn resolve(self, origin: &str, base_dir: &Path, threads: Option<usize>) -> Result<Loaded> {
         let materials = materials::resolve(&self.materials)?;
         let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
         let spec = ModelSpec {
@@ -144,15 +139,16 @@ impl Scene {
         };
         let pairs: Vec<_> = self.pairs.iter().map(PairSection::to_spec).collect();
         let model = ContactModel::build(&materials, &spec, &pairs)?;
-        let mut particles = particles::resolve(&self.particles, &materials)?;
-        let mut factories = factories::resolve(&self.factories, &materials, self.simulation.seed)?;
+        let particles = particles::resolve(&self.particles, &materials)?;
+        let factories = factories::resolve(&self.factories, &materials, self.simulation.seed)?;
+        if particles.is_empty() && factories.is_empty() {
+            bail!("the scene has no particles: add [[particles]] or [[factories]]");
+        }
         let walls = walls::resolve(&self.walls, &names, base_dir)?;
         let sim = self.simulation.resolve(&particles, &self.factories)?;
-        let mut warnings = vec![];
-        warnings.extend(factories::prime(&mut particles, &mut factories)?);
         let sample_every = self.output.resolve(sim.dt)?;
         let info = SceneInfo {
-            origin: String::new(),
+            origin: origin.to_string(),
             materials: names,
             laws: model.law_names().iter().map(|s| s.to_string()).collect(),
             walls: self
@@ -161,8 +157,6 @@ impl Scene {
                 .enumerate()
                 .map(|(k, w)| (w.display_name(k), w.shape.kind()))
                 .collect(),
-            factories: self.factories.len(),
-            explicit_particles: self.particles.len(),
         };
         let threads = threads.unwrap_or(sim.threads);
         let setup = Setup {
@@ -179,7 +173,6 @@ impl Scene {
         Ok(Loaded {
             sim: Simulation::new(setup)?,
             threads,
-            warnings,
             steps: sim.steps,
             sample_every,
             info,

@@ -88,7 +88,11 @@ impl SimulationSection {
             .radius
             .iter()
             .map(|r| 2.0 * r)
-            .chain(factories.iter().flat_map(|f| f.sizes.iter().map(|s| s.diameter)))
+            .chain(
+                factories
+                    .iter()
+                    .flat_map(|f| f.sizes.iter().map(|s| s.diameter)),
+            )
             .fold(f64::INFINITY, f64::min);
         let skin = match self.skin {
             Some(s) => check::non_negative("simulation.skin", s, "m")?,

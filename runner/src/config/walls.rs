@@ -6,7 +6,7 @@
 //! `mesh` {file, scale} (an STL file, relative to the scene file's directory). Lengths in m.
 
 use super::check;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use tilth_kernel::wall::axisymmetric::Axisymmetric;
@@ -15,19 +15,69 @@ use tilth_kernel::wall::plane::Plane;
 use tilth_kernel::wall::{Motion, Shape, Wall};
 
 /// One wall: `name`, `material`, `motion` and the keys of its shape `type`, in one table.
-/// (serde cannot combine `deny_unknown_fields` with `flatten`; the flattened shape refuses
-/// every key that is neither its own nor one of these, which the test below checks.)
-#[derive(Debug, Deserialize)]
+/// Unknown keys are refused (by the shape, which is told the common keys apart).
+#[derive(Debug)]
 pub struct WallSection {
     /// Shown in the summary (default `walls[k]`).
     pub name: Option<String>,
     /// Material name.
     pub material: String,
     /// Default `{ type = "fixed" }`.
-    #[serde(default)]
     pub motion: MotionSection,
-    #[serde(flatten)]
     pub shape: ShapeSection,
+}
+
+/// The keys every wall takes besides its shape's.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Common {
+    name: Option<String>,
+    material: String,
+    #[serde(default)]
+    motion: MotionSection,
+}
+
+const COMMON: [&str; 3] = ["name", "material", "motion"];
+
+/// A nested error's text ("unknown field `x`\nin `motion`\n") on one line.
+fn one_line(e: toml::de::Error) -> String {
+    e.to_string()
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+impl<'de> Deserialize<'de> for WallSection {
+    /// serde cannot refuse unknown keys across a flattened enum, so the table is split by hand.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let mut shape = toml::Table::deserialize(d)?;
+        let mut common = toml::Table::new();
+        for key in COMMON {
+            if let Some(v) = shape.remove(key) {
+                common.insert(key.to_string(), v);
+            }
+        }
+        let Common {
+            name,
+            material,
+            motion,
+        } = Common::deserialize(toml::Value::Table(common))
+            .map_err(|e| D::Error::custom(one_line(e)))?;
+        let shape = ShapeSection::deserialize(toml::Value::Table(shape)).map_err(|e| {
+            D::Error::custom(format!(
+                "{}; every wall also takes {}",
+                one_line(e),
+                COMMON.join(", ")
+            ))
+        })?;
+        Ok(WallSection {
+            name,
+            material,
+            motion,
+            shape,
+        })
+    }
 }
 
 /// The shape keys of a wall, chosen by `type`.
@@ -112,10 +162,17 @@ impl ShapeSection {
         let bad = || anyhow!("{}: degenerate {} geometry", key("type"), self.kind());
         Ok(match *self {
             ShapeSection::Plane { point, normal } => Box::new(
-                Plane::new(check::vec3(&key("point"), point)?, check::direction(&key("normal"), normal)?)
-                    .ok_or_else(bad)?,
+                Plane::new(
+                    check::vec3(&key("point"), point)?,
+                    check::direction(&key("normal"), normal)?,
+                )
+                .ok_or_else(bad)?,
             ),
-            ShapeSection::Disc { centre, axis, radius } => Box::new(
+            ShapeSection::Disc {
+                centre,
+                axis,
+                radius,
+            } => Box::new(
                 Axisymmetric::disc(
                     check::vec3(&key("centre"), centre)?,
                     check::direction(&key("axis"), axis)?,
@@ -123,7 +180,12 @@ impl ShapeSection {
                 )
                 .ok_or_else(bad)?,
             ),
-            ShapeSection::Cylinder { base, axis, radius, length } => Box::new(
+            ShapeSection::Cylinder {
+                base,
+                axis,
+                radius,
+                length,
+            } => Box::new(
                 Axisymmetric::cylinder(
                     check::vec3(&key("base"), base)?,
                     check::direction(&key("axis"), axis)?,
@@ -132,11 +194,21 @@ impl ShapeSection {
                 )
                 .ok_or_else(bad)?,
             ),
-            ShapeSection::Cone { base, axis, radius_base, radius_top, length } => {
+            ShapeSection::Cone {
+                base,
+                axis,
+                radius_base,
+                radius_top,
+                length,
+            } => {
                 let r0 = check::non_negative(&key("radius_base"), radius_base, "m")?;
                 let r1 = check::non_negative(&key("radius_top"), radius_top, "m")?;
                 if r0 == 0.0 && r1 == 0.0 {
-                    bail!("{} and {} are both 0; one must be positive", key("radius_base"), key("radius_top"));
+                    bail!(
+                        "{} and {} are both 0; one must be positive",
+                        key("radius_base"),
+                        key("radius_top")
+                    );
                 }
                 Box::new(
                     Axisymmetric::frustum(
@@ -152,7 +224,8 @@ impl ShapeSection {
             ShapeSection::Mesh { ref file, scale } => {
                 let scale = check::positive(&key("scale"), scale, "-")?;
                 let path = base_dir.join(file);
-                Box::new(Mesh::from_stl(&path, scale).with_context(|| key("file"))?)
+                // The mesh error names its cause itself; keep it out of the chain.
+                Box::new(Mesh::from_stl(&path, scale).map_err(|e| anyhow!("{}: {e}", key("file")))?)
             }
         })
     }
@@ -165,7 +238,12 @@ impl MotionSection {
             MotionSection::Velocity { velocity } => {
                 Motion::Velocity(check::vec3(&key("motion.velocity"), velocity)?)
             }
-            MotionSection::Servo { axis, target_force, gain, max_speed } => Motion::Servo {
+            MotionSection::Servo {
+                axis,
+                target_force,
+                gain,
+                max_speed,
+            } => Motion::Servo {
                 axis: check::direction(&key("motion.axis"), axis)?.normalize(),
                 target_force: check::finite(&key("motion.target_force"), target_force, "N")?,
                 gain: check::positive(&key("motion.gain"), gain, "m/s/N")?,
@@ -181,7 +259,11 @@ impl WallSection {
     }
 }
 
-pub fn resolve(sections: &[WallSection], materials: &[String], base_dir: &Path) -> Result<Vec<Wall>> {
+pub fn resolve(
+    sections: &[WallSection],
+    materials: &[String],
+    base_dir: &Path,
+) -> Result<Vec<Wall>> {
     if sections.len() > u16::MAX as usize {
         bail!("too many walls ({}); at most {}", sections.len(), u16::MAX);
     }
@@ -212,12 +294,20 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(err.contains("radius"), "{err}");
+        assert!(
+            err.contains("unknown field `radius`") && err.contains("also takes name"),
+            "{err}"
+        );
         let err = toml::from_str::<WallSection>(
             "type = 'plane'\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\nmaterial = 'soil'\nmotion = { type = 'fixed', speed = 1 }",
         )
         .unwrap_err()
         .to_string();
-        assert!(err.contains("speed"), "{err}");
+        assert!(err.contains("unknown field `speed`"), "{err}");
+        let err =
+            toml::from_str::<WallSection>("type = 'plane'\npoint = [0, 0, 0]\nnormal = [0, 0, 1]")
+                .unwrap_err()
+                .to_string();
+        assert!(err.contains("missing field `material`"), "{err}");
     }
 }

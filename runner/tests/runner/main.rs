@@ -1,0 +1,24 @@
+//! Tests of the `tilth` front end: scene files good and bad, and the binary end to end.
+
+mod config_files;
+mod end_to_end;
+
+use std::path::PathBuf;
+
+/// `runner/tests/configs/<dir>`.
+pub fn configs(dir: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/configs")
+        .join(dir)
+}
+
+/// The `.toml` files of a config directory, sorted.
+pub fn scene_files(dir: &str) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(configs(dir))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    files
+}
