@@ -9,7 +9,8 @@
 //! 4. pair phase: every listed pair's force and torques, written to the pair's own slot;
 //! 5. particle phase: each particle sums its pairs' outputs, its wall contacts and gravity in
 //!    a fixed order;
-//! 6. second half kick, with the failure checks (non-finite state, runaway speed, escape).
+//! 6. second half kick, applied in the particle phase as each force is known, with the
+//!    failure checks (non-finite state, runaway speed, escape).
 //!
 //! Every sum runs in an order that does not depend on the thread count, so 1 and 2 threads
 //! give the same bits (work is split in fixed chunks of [`CHUNK`] rows).
@@ -285,7 +286,7 @@ impl Simulation {
         sim.check_overlaps()?;
         sim.insert_particles();
         sim.rebuild();
-        sim.compute_forces();
+        sim.compute_forces(false);
         Ok(sim)
     }
 
@@ -375,8 +376,10 @@ impl Simulation {
         if sort || created > 0 || max_disp2.sqrt() + wall_disp > 0.5 * self.skin {
             self.rebuild();
         }
-        self.compute_forces();
-        self.finish_kick()
+        match self.compute_forces(true) {
+            None => Ok(()),
+            Some((i, kind)) => Err(self.failure(i, kind)),
+        }
     }
 
     /// Lets the factories create the particles due by now; returns how many were created.
@@ -427,7 +430,10 @@ impl Simulation {
         }
     }
 
-    fn compute_forces(&mut self) {
+    /// Computes every force and torque. With `kick`, also applies the step's second half kick
+    /// to each particle as soon as its force is known (one pass over memory instead of two)
+    /// and returns the first particle in a failed state.
+    fn compute_forces(&mut self, kick: bool) -> Option<(usize, Failure)> {
         let dt = self.dt;
         let p = &self.particles;
         let model = &self.model;
@@ -477,113 +483,125 @@ impl Simulation {
             }
         }
         let (wstart, wwall, wfeat) = (&wc.start, &wc.wall, &wc.feature);
-        let (pos, vel, omega, radius, mass, inertia, material) = (
-            &p.position,
-            &p.velocity,
-            &p.angular_velocity,
-            &p.radius,
-            &p.mass,
-            &p.inertia,
-            &p.material,
-        );
-        self.pool.install(|| {
+        let (pos, radius, mass, inertia, material) =
+            (&p.position, &p.radius, &p.mass, &p.inertia, &p.material);
+        let limit2 = self.speed_limit * self.speed_limit;
+        let dom = self.domain;
+        let failures: Vec<Option<(usize, Failure)>> = self.pool.install(|| {
             p.force
                 .par_chunks_mut(CHUNK)
                 .zip(p.torque.par_chunks_mut(CHUNK))
+                .zip(p.velocity.par_chunks_mut(CHUNK))
+                .zip(p.angular_velocity.par_chunks_mut(CHUNK))
                 .zip(wall_chunks.into_par_iter())
                 .enumerate()
-                .for_each(|(c, ((fs, ts), (wbase, whist, wforce, wpoint)))| {
-                    let mut hits: Vec<(f64, usize, Hit)> = vec![];
-                    for k in 0..fs.len() {
-                        let i = c * CHUNK + k;
-                        let mut f = gravity * mass[i];
-                        let mut t = DVec3::ZERO;
-                        for o in &out[pairs.row_start[i] as usize..pairs.row_start[i + 1] as usize]
-                        {
-                            f += o.force;
-                            t += o.torque_i;
-                        }
-                        for &kk in &pairs.rev_pair
-                            [pairs.rev_start[i] as usize..pairs.rev_start[i + 1] as usize]
-                        {
-                            let o = &out[kk as usize];
-                            f -= o.force;
-                            t += o.torque_j;
-                        }
-                        // Wall contacts: one group per wall; within a group (a mesh), nearer
-                        // triangles shadow contacts whose closest point lies on them.
-                        let (mut e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
-                        while e < end {
-                            let w = wwall[e] as usize;
-                            let mut g = e;
-                            while g < end && wwall[g] as usize == w {
-                                g += 1;
+                .map(
+                    |(c, ((((fs, ts), vs), ws), (wbase, whist, wforce, wpoint)))| {
+                        let mut hits: Vec<(f64, usize, Hit)> = vec![];
+                        let mut first = None;
+                        for k in 0..fs.len() {
+                            let i = c * CHUNK + k;
+                            let mut f = gravity * mass[i];
+                            let mut t = DVec3::ZERO;
+                            for o in
+                                &out[pairs.row_start[i] as usize..pairs.row_start[i + 1] as usize]
+                            {
+                                f += o.force;
+                                t += o.torque_i;
                             }
-                            let wall = &walls[w];
-                            let local = pos[i] - wall.offset;
-                            hits.clear();
-                            for q in e..g {
-                                let h = wall.shape.hit(wfeat[q], local);
-                                hits.push((h.distance, q, h));
+                            for &kk in &pairs.rev_pair
+                                [pairs.rev_start[i] as usize..pairs.rev_start[i + 1] as usize]
+                            {
+                                let o = &out[kk as usize];
+                                f -= o.force;
+                                t += o.torque_j;
                             }
-                            if hits.len() > 1 {
-                                hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                            }
-                            for a in 0..hits.len() {
-                                let (_, q, h) = hits[a];
-                                let lq = q - wbase;
-                                let hist = &mut whist[lq * stride..(lq + 1) * stride];
-                                let shadowed = (0..a).any(|b| {
-                                    let (_, qb, hb) = hits[b];
-                                    wforce[qb - wbase] != DVec3::ZERO
-                                        && wall.shape.feature_distance(hb.feature, h.point)
-                                            <= 1e-9 * radius[i]
-                                });
-                                let contact = if shadowed {
-                                    None
-                                } else {
-                                    Contact::with_wall(
-                                        pos[i],
-                                        pos[i] - h.normal * h.distance,
-                                        radius[i],
-                                        mass[i],
-                                        inertia[i],
-                                        vel[i],
-                                        omega[i],
-                                        wall.velocity,
-                                        dt,
-                                    )
-                                };
-                                let res = contact.and_then(|ct| {
-                                    model.evaluate(
-                                        material[i] as usize,
-                                        wall.material as usize,
-                                        &ct,
-                                        hist,
-                                    )
-                                });
-                                match res {
-                                    Some(o) => {
-                                        f += o.force;
-                                        t += o.torque_i;
-                                        wforce[lq] = o.force;
-                                        wpoint[lq] = h.point + wall.offset;
-                                    }
-                                    None => {
-                                        if shadowed {
-                                            hist.fill(0.0);
+                            // Wall contacts: one group per wall; within a group (a mesh), nearer
+                            // triangles shadow contacts whose closest point lies on them.
+                            let (mut e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
+                            while e < end {
+                                let w = wwall[e] as usize;
+                                let mut g = e;
+                                while g < end && wwall[g] as usize == w {
+                                    g += 1;
+                                }
+                                let wall = &walls[w];
+                                let local = pos[i] - wall.offset;
+                                hits.clear();
+                                for q in e..g {
+                                    let h = wall.shape.hit(wfeat[q], local);
+                                    hits.push((h.distance, q, h));
+                                }
+                                if hits.len() > 1 {
+                                    hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                                }
+                                for a in 0..hits.len() {
+                                    let (_, q, h) = hits[a];
+                                    let lq = q - wbase;
+                                    let hist = &mut whist[lq * stride..(lq + 1) * stride];
+                                    let shadowed = (0..a).any(|b| {
+                                        let (_, qb, hb) = hits[b];
+                                        wforce[qb - wbase] != DVec3::ZERO
+                                            && wall.shape.feature_distance(hb.feature, h.point)
+                                                <= 1e-9 * radius[i]
+                                    });
+                                    let contact = if shadowed {
+                                        None
+                                    } else {
+                                        Contact::with_wall(
+                                            pos[i],
+                                            pos[i] - h.normal * h.distance,
+                                            radius[i],
+                                            mass[i],
+                                            inertia[i],
+                                            vs[k],
+                                            ws[k],
+                                            wall.velocity,
+                                            dt,
+                                        )
+                                    };
+                                    let res = contact.and_then(|ct| {
+                                        model.evaluate(
+                                            material[i] as usize,
+                                            wall.material as usize,
+                                            &ct,
+                                            hist,
+                                        )
+                                    });
+                                    match res {
+                                        Some(o) => {
+                                            f += o.force;
+                                            t += o.torque_i;
+                                            wforce[lq] = o.force;
+                                            wpoint[lq] = h.point + wall.offset;
                                         }
-                                        wforce[lq] = DVec3::ZERO;
+                                        None => {
+                                            if shadowed {
+                                                hist.fill(0.0);
+                                            }
+                                            wforce[lq] = DVec3::ZERO;
+                                        }
                                     }
                                 }
+                                e = g;
                             }
-                            e = g;
+                            fs[k] = f;
+                            ts[k] = t;
+                            if kick {
+                                vs[k] += f * (0.5 * dt / mass[i]);
+                                ws[k] += t * (0.5 * dt / inertia[i]);
+                                if first.is_none() {
+                                    first =
+                                        check(pos[i], vs[k], ws[k], limit2, dom).map(|f| (i, f));
+                                }
+                            }
                         }
-                        fs[k] = f;
-                        ts[k] = t;
-                    }
-                });
+                        first
+                    },
+                )
+                .collect()
         });
+        let failure = failures.into_iter().flatten().next();
 
         // Wall totals: the opposite of what the walls did to the particles, summed in order.
         for w in &mut self.walls {
@@ -600,52 +618,7 @@ impl Simulation {
                 w.torque += arm.cross(-f);
             }
         }
-    }
-
-    fn finish_kick(&mut self) -> Result<()> {
-        let dt = self.dt;
-        let limit2 = self.speed_limit * self.speed_limit;
-        let dom = self.domain;
-        let p = &mut self.particles;
-        // First bad particle per chunk; the earliest chunk wins, whatever the thread count.
-        let bad = self.pool.install(|| {
-            p.velocity
-                .par_chunks_mut(CHUNK)
-                .zip(p.angular_velocity.par_chunks_mut(CHUNK))
-                .zip(p.force.par_chunks(CHUNK))
-                .zip(p.torque.par_chunks(CHUNK))
-                .zip(p.mass.par_chunks(CHUNK))
-                .zip(p.inertia.par_chunks(CHUNK))
-                .zip(p.position.par_chunks(CHUNK))
-                .enumerate()
-                .map(|(c, ((((((v, w), f), t), m), inertia), x))| {
-                    let mut first = None;
-                    for k in 0..v.len() {
-                        v[k] += f[k] * (0.5 * dt / m[k]);
-                        w[k] += t[k] * (0.5 * dt / inertia[k]);
-                        if first.is_none() {
-                            let ok = x[k].is_finite() && v[k].is_finite() && w[k].is_finite();
-                            let kind = if !ok {
-                                Some(Failure::NonFinite)
-                            } else if v[k].length_squared() > limit2 {
-                                Some(Failure::Runaway)
-                            } else if x[k].cmplt(dom.min).any() || x[k].cmpgt(dom.max).any() {
-                                Some(Failure::Escaped)
-                            } else {
-                                None
-                            };
-                            first = kind.map(|kind| (c * CHUNK + k, kind));
-                        }
-                    }
-                    first
-                })
-                .find_first(|b| b.is_some())
-                .flatten()
-        });
-        match bad {
-            None => Ok(()),
-            Some((i, kind)) => Err(self.failure(i, kind)),
-        }
+        failure
     }
 
     fn failure(&self, i: usize, kind: Failure) -> KernelError {
@@ -752,6 +725,20 @@ impl Simulation {
             }
         }
         h
+    }
+}
+
+/// What is wrong with a particle after its kick, if anything.
+#[inline]
+fn check(x: DVec3, v: DVec3, w: DVec3, limit2: f64, dom: Aabb) -> Option<Failure> {
+    if !(x.is_finite() && v.is_finite() && w.is_finite()) {
+        Some(Failure::NonFinite)
+    } else if v.length_squared() > limit2 {
+        Some(Failure::Runaway)
+    } else if x.cmplt(dom.min).any() || x.cmpgt(dom.max).any() {
+        Some(Failure::Escaped)
+    } else {
+        None
     }
 }
 

@@ -340,8 +340,11 @@ impl ContactModel {
         }
         let l = &self.layout;
         let normal = laws.normal.force(c, &mut history[l.normal.clone()]);
+        // Damping acts wherever the contact has stiffness: for JKR also in tension (negative
+        // overlap, positive contact radius), or a particle hanging by adhesion would
+        // oscillate undamped.
         let damp_n = match &laws.damping {
-            Some(d) if c.overlap > 0.0 => d.coefficient(normal.stiffness, c.m_eff) * c.v_n,
+            Some(d) if normal.stiffness > 0.0 => d.coefficient(normal.stiffness, c.m_eff) * c.v_n,
             _ => 0.0,
         };
         let coulomb_load = (normal.friction_load + damp_n).abs();
@@ -350,7 +353,7 @@ impl ContactModel {
         if let Some(t) = &laws.tangential {
             let s_t = t.stiffness(c, &normal);
             let eta_t = match &laws.damping {
-                Some(d) if c.overlap > 0.0 => d.coefficient(s_t, c.m_eff),
+                Some(d) if s_t > 0.0 => d.coefficient(s_t, c.m_eff),
                 _ => 0.0,
             };
             tangential = t.force(

@@ -82,17 +82,21 @@ pub fn settling_bed_setup(args: &SettlingBedArgs) -> Result<Setup> {
             .expect("non-zero normal");
         Wall::new(name, Box::new(shape), 0, Motion::Fixed)
     };
+    // The deck's box holds 20,000 particles; larger runs widen it (same height, same
+    // settling time) so the density per floor area stays the deck's.
+    let s = (args.particles as f64 / 20_000.0).max(1.0).sqrt();
+    let half = 0.03 * s;
     let walls = vec![
         plane("floor", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-        plane("x-", [-0.03, 0.0, 0.0], [1.0, 0.0, 0.0]),
-        plane("x+", [0.03, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-        plane("y-", [0.0, -0.03, 0.0], [0.0, 1.0, 0.0]),
-        plane("y+", [0.0, 0.03, 0.0], [0.0, -1.0, 0.0]),
+        plane("x-", [-half, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        plane("x+", [half, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        plane("y-", [0.0, -half, 0.0], [0.0, 1.0, 0.0]),
+        plane("y+", [0.0, half, 0.0], [0.0, -1.0, 0.0]),
     ];
     let mut factory = Factory::new(FactorySpec {
         region: Region::Box {
-            min: DVec3::new(-0.028, -0.028, 0.002),
-            max: DVec3::new(0.028, 0.028, 0.118),
+            min: DVec3::new(-(half - 0.002), -(half - 0.002), 0.002),
+            max: DVec3::new(half - 0.002, half - 0.002, 0.118),
         },
         sizes: vec![(1e-3, 1.0)],
         basis: Basis::Number,
@@ -126,8 +130,8 @@ pub fn settling_bed_setup(args: &SettlingBedArgs) -> Result<Setup> {
         skin: 4e-4,
         threads: args.threads as usize,
         domain: Aabb {
-            min: DVec3::new(-0.035, -0.035, -0.005),
-            max: DVec3::new(0.035, 0.035, 0.125),
+            min: DVec3::new(-(half + 0.005), -(half + 0.005), -0.005),
+            max: DVec3::new(half + 0.005, half + 0.005, 0.125),
         },
     })
 }

@@ -69,12 +69,13 @@ impl TangentialLaw for Mindlin {
         }
         let n = c.normal;
         let mut xi = DVec3::new(h[0], h[1], h[2]);
-        let len = xi.length();
-        if len > 0.0 {
+        // Rotate into the current tangent plane, keeping the length (one square root).
+        let len2 = xi.length_squared();
+        if len2 > 0.0 {
             xi -= n * n.dot(xi);
-            let l2 = xi.length();
+            let l2 = xi.length_squared();
             if l2 > 0.0 {
-                xi *= len / l2;
+                xi *= (len2 / l2).sqrt();
             }
         }
         xi += c.v_t * c.dt;

@@ -1,0 +1,100 @@
+//! An EPSD heap comes to rest: poured particles with rolling resistance stop moving, and the
+//! floor then carries exactly their weight.
+//!
+//! Hertz contacts, no cohesion. With JKR cohesion added, a poured heap did NOT settle within
+//! 1 s on 2026-11-21 (a few particles kept rocking at ~0.1 m/s and the kinetic energy rose at
+//! times): an open problem recorded in the session notes, suspected in the interplay of the
+//! total-form Mindlin spring (stiffness 8 G* a) with JKR's contact radius in tension.
+
+mod common;
+use common::*;
+use glam::DVec3;
+use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
+use tilth_kernel::particles::Particles;
+use tilth_kernel::sim::{Aabb, Setup, Simulation};
+use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric, plane::Plane};
+
+#[test]
+fn epsd_heap_comes_to_rest() {
+    let m = model(
+        &spec("hertz", Some("restitution"), Some("mindlin"), Some("epsd")),
+        &[
+            ("restitution", 0.45),
+            ("friction", 0.8),
+            ("rolling_friction", 0.15),
+        ],
+    );
+    let factory = Factory::new(FactorySpec {
+        region: Region::Cylinder {
+            base: DVec3::new(0.0, 0.0, 0.02),
+            radius: 0.006,
+            height: 0.03,
+        },
+        sizes: vec![(1e-3, 1.0)],
+        basis: Basis::Number,
+        material: 0,
+        density: RHO,
+        rate: 10_000.0,
+        count: 600,
+        velocity: DVec3::new(0.0, 0.0, -0.3),
+        start_time: 0.0,
+        seed: 5,
+    })
+    .unwrap();
+    let walls = vec![
+        Wall::new(
+            "floor",
+            Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
+            0,
+            Motion::Fixed,
+        ),
+        Wall::new(
+            "ring",
+            Box::new(Axisymmetric::cylinder(DVec3::ZERO, DVec3::Z, 0.04, 0.02).unwrap()),
+            0,
+            Motion::Fixed,
+        ),
+    ];
+    let mut s = Simulation::new(Setup {
+        model: m,
+        particles: Particles::default(),
+        walls,
+        factories: vec![factory],
+        dt: 5e-6,
+        gravity: DVec3::new(0.0, 0.0, -9.81),
+        skin: 4e-4,
+        threads: 2,
+        domain: Aabb {
+            min: DVec3::new(-0.05, -0.05, -0.005),
+            max: DVec3::new(0.05, 0.05, 0.06),
+        },
+    })
+    .unwrap();
+    s.run(100_000).unwrap(); // 0.5 s: 0.06 s of pouring, then settling
+    assert_eq!(s.particles.len(), 600);
+    let before = s.particles.position.clone();
+    let ids = s.particles.id.clone();
+    s.run(10_000).unwrap(); // 0.05 s more
+    let p = &s.particles;
+    // Match by id: particles may have been reordered in between.
+    let mut moved: f64 = 0.0;
+    for (k, id) in ids.iter().enumerate() {
+        let now = p.id.iter().position(|x| x == id).unwrap();
+        moved = moved.max((p.position[now] - before[k]).length());
+    }
+    let v_max = p.velocity.iter().map(|v| v.length()).fold(0.0, f64::max);
+    assert!(
+        moved < 1e-5,
+        "a particle moved {moved} m in the last 0.05 s"
+    );
+    assert!(v_max < 1e-3, "fastest particle {v_max} m/s");
+    let weight: f64 = p.mass.iter().sum::<f64>() * 9.81;
+    let load = -(s.walls[0].force.z + s.walls[1].force.z);
+    assert!(
+        (load - weight).abs() < 1e-3 * weight,
+        "walls carry {load} N of {weight} N"
+    );
+    // A heap, not a monolayer: its top stands at least two particle layers above the floor.
+    let top = p.position.iter().map(|x| x.z).fold(0.0, f64::max);
+    assert!(top > 2.0 * 2.0 * R, "heap top at {top} m");
+}

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# The settling-bed speed benchmark (../shared/benchmarks/settling-bed/README.md), run in tilth,
+# LIGGGHTS and LAMMPS in one sitting on this machine; prints particle-steps/s and the ratios
+# that BENCHMARKS.md records. Peers: apt-get install -y liggghts lammps (not needed by CI).
+#
+#   tools/bench/settling-bed.sh            # N=20000 particles, S=20000 steps
+#   N=20000 S=5000 tools/bench/settling-bed.sh
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+N=${N:-20000}
+S=${S:-20000}
+DECK=${DECK:-$(cd ../shared/benchmarks/settling-bed && pwd)}
+cargo build --release -q -p tilth
+TILTH=$PWD/target/release/tilth
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+rate() { awk -v n="$N" -v s="$S" -v t="$1" 'BEGIN { printf "%.4g", n * s / t }'; }
+loop_time() { grep -E "^Loop time of" "$1" | tail -1 | awk '{print $4}'; }
+
+echo "settling bed: $N particles, $S steps, $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores"
+declare -A R
+for t in 1 2; do
+  R[tilth$t]=$("$TILTH" bench settling-bed --particles "$N" --steps "$S" --threads "$t" --quiet | tail -1 | awk '{print $2}')
+  echo "tilth ${t} thread(s): ${R[tilth$t]} particle-steps/s"
+done
+if command -v liggghts >/dev/null; then
+  (cd "$work" && liggghts -in "$DECK/bed.liggghts" -var npart "$N" -var nsteps "$S" -log none > liggghts.out 2>&1)
+  R[liggghts]=$(rate "$(loop_time "$work/liggghts.out")")
+  echo "LIGGGHTS $(liggghts -h 2>/dev/null | grep -m1 -o 'LIGGGHTS[^ ]* [^ ]*' || true): ${R[liggghts]} particle-steps/s (loop time $(loop_time "$work/liggghts.out") s)"
+fi
+if command -v lmp >/dev/null; then
+  (cd "$work" && lmp -in "$DECK/bed.lammps" -var npart "$N" -var nsteps "$S" -log none > lammps.out 2>&1)
+  R[lammps]=$(rate "$(loop_time "$work/lammps.out")")
+  echo "LAMMPS: ${R[lammps]} particle-steps/s (loop time $(loop_time "$work/lammps.out") s)"
+fi
+awk -v a="${R[tilth1]}" -v b="${R[tilth2]}" 'BEGIN { printf "tilth speed-up 1 -> 2 threads: %.2fx\n", b / a }'
+[ -n "${R[liggghts]:-}" ] && awk -v a="${R[tilth1]}" -v l="${R[liggghts]}" 'BEGIN { printf "tilth (1 thread) / LIGGGHTS: %.2fx\n", a / l }'
+[ -n "${R[lammps]:-}" ] && awk -v a="${R[tilth1]}" -v l="${R[lammps]}" 'BEGIN { printf "tilth (1 thread) / LAMMPS: %.2fx\n", a / l }'
+exit 0
