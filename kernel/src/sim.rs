@@ -635,7 +635,7 @@ impl Simulation {
         });
         let (what, cause) = match kind {
             Failure::NonFinite => (
-                format!("particle {i} has a non-finite position, velocity or spin (x = {x:?})"),
+                format!("particle {i} has a non-finite position, velocity or spin (x = {:?})", x.to_array()),
                 dt_cause.unwrap_or_else(|| "a contact produced a non-finite force: check for particles created on top of each other or walls, and for extreme law parameters".into()),
             ),
             Failure::Runaway => (
@@ -647,7 +647,13 @@ impl Simulation {
                 let physical = (self.speed_limit - 1.0) / 10.0;
                 let shot = v.length() > 2.0 * physical;
                 (
-                    format!("particle {i} left the domain [{:?}, {:?}] at x = {x:?}, v = {v:?}", self.domain.min, self.domain.max),
+                    format!(
+                        "particle {i} left the domain [{:?}, {:?}] at x = {:?} m, v = {:?} m/s",
+                        self.domain.min.to_array(),
+                        self.domain.max.to_array(),
+                        x.to_array(),
+                        v.to_array()
+                    ),
                     dt_cause.unwrap_or_else(|| {
                         if shot {
                             format!("it moves at {:.3} m/s, faster than anything in this set-up can make it ({physical:.3} m/s): energy was injected, most often by particles created overlapping a wall (check factory regions against the geometry) or by a wall moving too fast", v.length())

@@ -5,7 +5,7 @@ mod common;
 use common::*;
 use glam::DVec3;
 use std::f64::consts::PI;
-use tilth_kernel::contact::{Contact, ContactModel, ModelSpec, PairSpec};
+use tilth_kernel::contact::{ContactModel, ModelSpec, PairSpec};
 
 const V: f64 = 1e-11; // bridge volume, m^3 (about 0.3 % of a 2 mm sphere)
 const GAMMA: f64 = 0.072;
@@ -27,20 +27,6 @@ fn capillary_model() -> ContactModel {
     ContactModel::build(&[soil()], &spec, &[pair]).unwrap()
 }
 
-fn at(overlap: f64) -> Contact {
-    let dist = 2.0 * R - overlap;
-    Contact::between_spheres(
-        DVec3::new(dist, 0.0, 0.0),
-        dist,
-        (R, R),
-        (1.0, 1.0),
-        (1.0, 1.0),
-        (DVec3::ZERO, DVec3::ZERO),
-        (DVec3::ZERO, DVec3::ZERO),
-        1e-6,
-    )
-}
-
 #[test]
 fn bridge_force_follows_willett_and_ruptures_at_lian_distance() {
     let m = capillary_model();
@@ -49,11 +35,14 @@ fn bridge_force_follows_willett_and_ruptures_at_lian_distance() {
     let theta = THETA_DEG.to_radians();
     let rupture = (1.0 + theta / 2.0) * V.cbrt();
     // Forms on contact.
-    assert!(m.evaluate(0, 0, &at(1e-7), &mut h).is_some());
+    assert!(
+        m.evaluate(0, 0, &contact_at(1e-7, DVec3::ZERO, 1e-6), &mut h)
+            .is_some()
+    );
     for k in 1..20 {
         let gap = rupture * k as f64 / 20.0;
         let f = -m
-            .evaluate(0, 0, &at(-gap), &mut h)
+            .evaluate(0, 0, &contact_at(-gap, DVec3::ZERO, 1e-6), &mut h)
             .expect("bridge holds below the rupture gap")
             .force
             .x;
@@ -65,11 +54,18 @@ fn bridge_force_follows_willett_and_ruptures_at_lian_distance() {
         );
     }
     assert!(
-        m.evaluate(0, 0, &at(-1.001 * rupture), &mut h).is_none(),
+        m.evaluate(
+            0,
+            0,
+            &contact_at(-1.001 * rupture, DVec3::ZERO, 1e-6),
+            &mut h
+        )
+        .is_none(),
         "ruptured beyond S_c"
     );
     assert!(
-        m.evaluate(0, 0, &at(-0.5 * rupture), &mut h).is_none(),
+        m.evaluate(0, 0, &contact_at(-0.5 * rupture, DVec3::ZERO, 1e-6), &mut h)
+            .is_none(),
         "no bridge across a gap before contact"
     );
 }

@@ -5,23 +5,8 @@ mod common;
 use common::*;
 use glam::DVec3;
 use std::f64::consts::PI;
-use tilth_kernel::contact::Contact;
 
 const GAMMA: f64 = 0.356;
-
-fn contact_at(overlap: f64) -> Contact {
-    let dist = 2.0 * R - overlap;
-    Contact::between_spheres(
-        DVec3::new(dist, 0.0, 0.0),
-        dist,
-        (R, R),
-        (1.0, 1.0),
-        (1.0, 1.0),
-        (DVec3::ZERO, DVec3::ZERO),
-        (DVec3::ZERO, DVec3::ZERO),
-        1e-6,
-    )
-}
 
 fn e_eff() -> f64 {
     1.0 / (2.0 * (1.0 - NU * NU) / E)
@@ -34,7 +19,7 @@ fn path(overlaps: &[f64]) -> Vec<Option<f64>> {
     overlaps
         .iter()
         .map(|&d| {
-            let c = contact_at(d);
+            let c = contact_at(d, DVec3::ZERO, 1e-6);
             m.evaluate(0, 0, &c, &mut h).map(|o| -o.force.x)
         })
         .collect()
@@ -125,7 +110,11 @@ fn zero_surface_energy_is_hertz() {
     let f = path(&[1e-6])[0].unwrap();
     let m = model(&spec("jkr", None, None, None), &[("surface_energy", 0.0)]);
     let mut h = vec![0.0; m.history_stride()];
-    let f0 = -m.evaluate(0, 0, &contact_at(1e-6), &mut h).unwrap().force.x;
+    let f0 = -m
+        .evaluate(0, 0, &contact_at(1e-6, DVec3::ZERO, 1e-6), &mut h)
+        .unwrap()
+        .force
+        .x;
     let hertz = 4.0 / 3.0 * e_eff() * r.sqrt() * 1e-6f64.powf(1.5);
     assert!(
         (f0 - hertz).abs() < 1e-10 * hertz,

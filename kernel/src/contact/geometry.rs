@@ -116,3 +116,16 @@ impl Contact {
         })
     }
 }
+
+/// Rotates a history vector (a tangential spring, a rolling torque) into the plane normal to
+/// `n`, keeping its length: the contact turned, the spring turns with it.
+#[inline]
+pub fn rotate_into_plane(v: DVec3, n: DVec3) -> DVec3 {
+    let len2 = v.length_squared();
+    if len2 == 0.0 {
+        return v;
+    }
+    let p = v - n * n.dot(v);
+    let l2 = p.length_squared();
+    if l2 > 0.0 { p * (len2 / l2).sqrt() } else { p }
+}

@@ -24,10 +24,10 @@ pub struct Mesh {
 /// Why a mesh could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    #[error("cannot read STL file {path}: {source}")]
+    #[error("cannot read STL file {path}: {reason}")]
     Read {
         path: String,
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     #[error("STL file {path} has no triangles")]
     Empty { path: String },
@@ -39,13 +39,13 @@ impl Mesh {
     /// Loads an ASCII or binary STL file, scaling coordinates by `scale` (e.g. 1e-3 for mm).
     pub fn from_stl(path: &Path, scale: f64) -> Result<Mesh, MeshError> {
         let p = path.display().to_string();
-        let mut file = std::fs::File::open(path).map_err(|source| MeshError::Read {
+        let mut file = std::fs::File::open(path).map_err(|reason| MeshError::Read {
             path: p.clone(),
-            source,
+            reason,
         })?;
-        let stl = stl_io::read_stl(&mut file).map_err(|source| MeshError::Read {
+        let stl = stl_io::read_stl(&mut file).map_err(|reason| MeshError::Read {
             path: p.clone(),
-            source,
+            reason,
         })?;
         let v = |i: usize| {
             let a = stl.vertices[i];

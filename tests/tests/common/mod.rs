@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use std::collections::BTreeMap;
-use tilth_kernel::contact::{ContactModel, ModelSpec, PairSpec};
+use tilth_kernel::contact::{Contact, ContactModel, ModelSpec, PairSpec};
 use tilth_kernel::material::Material;
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, Setup, Simulation};
@@ -96,4 +96,20 @@ pub fn head_on_pair(speed: f64) -> Particles {
         0,
     );
     p
+}
+
+/// The contact of two spheres of radius R (unit masses and inertias) overlapping by
+/// `overlap` along x, sphere i moving at `v_i`, for direct law evaluation.
+pub fn contact_at(overlap: f64, v_i: DVec3, dt: f64) -> Contact {
+    let dist = 2.0 * R - overlap;
+    Contact::between_spheres(
+        DVec3::new(dist, 0.0, 0.0),
+        dist,
+        (R, R),
+        (1.0, 1.0),
+        (1.0, 1.0),
+        (v_i, DVec3::ZERO),
+        (DVec3::ZERO, DVec3::ZERO),
+        dt,
+    )
 }

@@ -13,6 +13,7 @@
 use crate::contact::laws::cdt::ROLLING_FRICTION;
 use crate::contact::{BuiltLaw, Contact, LawEntry, LawInput, NormalForce, RollingLaw, Slot};
 use crate::param::{Bound, ParamSpec};
+use crate::contact::geometry::rotate_into_plane;
 use glam::DVec3;
 
 pub const ROLLING_DAMPING: ParamSpec = ParamSpec {
@@ -58,15 +59,7 @@ impl RollingLaw for Epsd {
         }
         let w = c.omega_i - c.omega_j;
         let w_r = w - n * n.dot(w);
-        let mut m = DVec3::new(h[0], h[1], h[2]);
-        let len = m.length();
-        if len > 0.0 {
-            m -= n * n.dot(m);
-            let l2 = m.length();
-            if l2 > 0.0 {
-                m *= len / l2;
-            }
-        }
+        let mut m = rotate_into_plane(DVec3::new(h[0], h[1], h[2]), n);
         m -= k_r * w_r * c.dt;
         let m_max = self.mu_r * c.r_eff * load;
         let mut total = m;

@@ -19,6 +19,7 @@
 
 use crate::contact::{BuiltLaw, Contact, LawEntry, LawInput, NormalForce, Slot, TangentialLaw};
 use crate::param::{Bound, ParamSpec};
+use crate::contact::geometry::rotate_into_plane;
 use glam::DVec3;
 
 pub const FRICTION: ParamSpec = ParamSpec {
@@ -68,16 +69,7 @@ impl TangentialLaw for Mindlin {
             return DVec3::ZERO;
         }
         let n = c.normal;
-        let mut xi = DVec3::new(h[0], h[1], h[2]);
-        // Rotate into the current tangent plane, keeping the length (one square root).
-        let len2 = xi.length_squared();
-        if len2 > 0.0 {
-            xi -= n * n.dot(xi);
-            let l2 = xi.length_squared();
-            if l2 > 0.0 {
-                xi *= (len2 / l2).sqrt();
-            }
-        }
+        let mut xi = rotate_into_plane(DVec3::new(h[0], h[1], h[2]), n);
         xi += c.v_t * c.dt;
         let mut f = -s_t * xi - eta_t * c.v_t;
         let cap = self.mu * coulomb_load;

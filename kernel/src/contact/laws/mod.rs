@@ -17,6 +17,7 @@ registry! {
     jkr,
     restitution,
     mindlin,
+    mindlin_incremental,
     coulomb_viscous,
     cdt,
     epsd,
