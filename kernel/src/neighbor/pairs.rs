@@ -59,101 +59,89 @@ impl PairList {
         let n = position.len();
         let r_max = radius.iter().copied().fold(0.0, f64::max);
         let grid = CellGrid::build(position, 2.0 * r_max + extra);
-        // Carrying history needs only the old rows (row_start, j, history): free the rest
-        // before the new list exists, so the peak holds one old and one new list.
-        self.i = Vec::new();
-        self.rev_start = Vec::new();
-        self.rev_pair = Vec::new();
         let old = &*self;
         let stride = self.stride;
-        let build_chunk = |c: usize| -> RowChunk {
-            let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
-            let mut out = RowChunk {
-                counts: Vec::with_capacity(rows.len()),
-                j: vec![],
-                history: vec![],
-            };
-            let mut near = Vec::with_capacity(64);
-            for i in rows {
-                near.clear();
-                let (pi, ri) = (position[i], radius[i]);
-                grid.for_each_near(pi, |j| {
-                    let ju = j as usize;
-                    if id[ju] > id[i] {
-                        let cut = ri + radius[ju] + extra;
-                        if (position[ju] - pi).length_squared() < cut * cut {
-                            near.push(j);
-                        }
-                    }
-                });
-                near.sort_unstable();
-                out.counts.push(near.len() as u32);
-                // Carry history from the old row of the same particle. Without a reorder
-                // both rows ascend in j and merge; after one, look each partner up.
-                let oi = old_of_new.map_or(i, |m| m[i] as usize);
-                let old_row = if oi + 1 < old.row_start.len() {
-                    old.row_start[oi] as usize..old.row_start[oi + 1] as usize
-                } else {
-                    0..0
+        let chunks: Vec<RowChunk> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
+                let mut out = RowChunk {
+                    counts: Vec::with_capacity(rows.len()),
+                    j: vec![],
+                    history: vec![],
                 };
-                let mut k = old_row.start;
-                for &j in &near {
-                    let found = match old_of_new {
-                        None => {
-                            while k < old_row.end && old.j[k] < j {
-                                k += 1;
+                let mut near = Vec::with_capacity(64);
+                for i in rows {
+                    near.clear();
+                    let (pi, ri) = (position[i], radius[i]);
+                    grid.for_each_near(pi, |j| {
+                        let ju = j as usize;
+                        if id[ju] > id[i] {
+                            let cut = ri + radius[ju] + extra;
+                            if (position[ju] - pi).length_squared() < cut * cut {
+                                near.push(j);
                             }
-                            (k < old_row.end && old.j[k] == j).then_some(k)
                         }
-                        Some(m) => {
-                            let oj = m[j as usize];
-                            old_row.clone().find(|&q| old.j[q] == oj)
-                        }
+                    });
+                    near.sort_unstable();
+                    out.counts.push(near.len() as u32);
+                    // Carry history from the old row of the same particle. Without a reorder
+                    // both rows ascend in j and merge; after one, look each partner up.
+                    let oi = old_of_new.map_or(i, |m| m[i] as usize);
+                    let old_row = if oi + 1 < old.row_start.len() {
+                        old.row_start[oi] as usize..old.row_start[oi + 1] as usize
+                    } else {
+                        0..0
                     };
-                    match found {
-                        Some(q) => out
-                            .history
-                            .extend_from_slice(&old.history[q * stride..(q + 1) * stride]),
-                        None => out.history.extend(std::iter::repeat_n(0.0, stride)),
+                    let mut k = old_row.start;
+                    for &j in &near {
+                        let found = match old_of_new {
+                            None => {
+                                while k < old_row.end && old.j[k] < j {
+                                    k += 1;
+                                }
+                                (k < old_row.end && old.j[k] == j).then_some(k)
+                            }
+                            Some(m) => {
+                                let oj = m[j as usize];
+                                old_row.clone().find(|&q| old.j[q] == oj)
+                            }
+                        };
+                        match found {
+                            Some(q) => out
+                                .history
+                                .extend_from_slice(&old.history[q * stride..(q + 1) * stride]),
+                            None => out.history.extend(std::iter::repeat_n(0.0, stride)),
+                        }
                     }
+                    out.j.extend_from_slice(&near);
                 }
-                out.j.extend_from_slice(&near);
-            }
-            out
-        };
-        // The new list is about as long as the old one (particles move less than the skin).
-        let reserve = old.j.len();
+                out
+            })
+            .collect();
+
+        let total: usize = chunks.iter().map(|c| c.j.len()).sum();
         let mut list = PairList {
-            i: Vec::with_capacity(reserve),
-            j: Vec::with_capacity(reserve),
+            i: Vec::with_capacity(total),
+            j: Vec::with_capacity(total),
             row_start: Vec::with_capacity(n + 1),
-            history: Vec::with_capacity(reserve * stride),
+            history: Vec::with_capacity(total * stride),
             stride,
             rev_start: vec![0; n + 1],
-            rev_pair: vec![],
+            rev_pair: vec![0; total],
         };
         list.row_start.push(0);
         let mut row = 0u32;
-        // A few chunks at a time: parallel, yet only a batch of temporaries alive at once.
-        const BATCH: usize = 16;
-        let nchunks = n.div_ceil(CHUNK);
-        for first in (0..nchunks).step_by(BATCH) {
-            let chunks: Vec<RowChunk> = (first..(first + BATCH).min(nchunks))
-                .into_par_iter()
-                .map(build_chunk)
-                .collect();
-            for c in chunks {
-                for &cnt in &c.counts {
-                    list.i.extend(std::iter::repeat_n(row, cnt as usize));
-                    let last = *list.row_start.last().unwrap();
-                    list.row_start.push(last + cnt);
-                    row += 1;
-                }
-                list.j.extend_from_slice(&c.j);
-                list.history.extend_from_slice(&c.history);
+        for c in chunks {
+            for &cnt in &c.counts {
+                list.i.extend(std::iter::repeat_n(row, cnt as usize));
+                let last = *list.row_start.last().unwrap();
+                list.row_start.push(last + cnt);
+                row += 1;
             }
+            list.j.extend_from_slice(&c.j);
+            list.history.extend_from_slice(&c.history);
         }
-        list.rev_pair = vec![0; list.j.len()];
         for &j in &list.j {
             list.rev_start[j as usize + 1] += 1;
         }
