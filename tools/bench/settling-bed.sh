@@ -27,7 +27,7 @@ done
 if command -v liggghts >/dev/null; then
   (cd "$work" && liggghts -in "$DECK/bed.liggghts" -var npart "$N" -var nsteps "$S" -log none > liggghts.out 2>&1)
   R[liggghts]=$(rate "$(loop_time "$work/liggghts.out")")
-  echo "LIGGGHTS $(liggghts -h 2>/dev/null | grep -m1 -o 'LIGGGHTS[^ ]* [^ ]*' || true): ${R[liggghts]} particle-steps/s (loop time $(loop_time "$work/liggghts.out") s)"
+  echo "LIGGGHTS: ${R[liggghts]} particle-steps/s (loop time $(loop_time "$work/liggghts.out") s)"
 fi
 if command -v lmp >/dev/null; then
   (cd "$work" && lmp -in "$DECK/bed.lammps" -var npart "$N" -var nsteps "$S" -log none > lammps.out 2>&1)
