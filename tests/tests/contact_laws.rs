@@ -3,7 +3,6 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use tilth_kernel::wall::{Motion, Wall, plane::Plane};
 
 fn restitution_pp(e: f64) -> f64 {
     let m = model(
@@ -40,12 +39,7 @@ fn head_on_restitution_particle_wall() {
             RHO,
             0,
         );
-        let floor = Wall::new(
-            "floor",
-            Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-            0,
-            Motion::Fixed,
-        );
+        let floor = floor();
         let mut s = sim(m, p, vec![floor], 1e-8, DVec3::ZERO, 1);
         s.run(40_000).unwrap();
         let got = s.particles.velocity[0].z / 0.5;
@@ -64,17 +58,11 @@ fn hertz_static_overlap_under_gravity() {
     let mut p = tilth_kernel::particles::Particles::default();
     p.push(DVec3::new(0.0, 0.0, R), DVec3::ZERO, R, RHO, 0);
     let mass = p.mass[0];
-    let floor = Wall::new(
-        "floor",
-        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-        0,
-        Motion::Fixed,
-    );
+    let floor = floor();
     let mut s = sim(m, p, vec![floor], 1e-6, DVec3::new(0.0, 0.0, -9.81), 1);
     s.run(20_000).unwrap();
     // Wall and particle both soil: 1/E* = 2 (1 - nu^2) / E.
-    let e_eff = 1.0 / (2.0 * (1.0 - NU * NU) / E);
-    let expected = (3.0 * mass * 9.81 / (4.0 * e_eff * R.sqrt())).powf(2.0 / 3.0);
+    let expected = (3.0 * mass * 9.81 / (4.0 * e_eff() * R.sqrt())).powf(2.0 / 3.0);
     let got = R - s.particles.position[0].z;
     assert!(
         (got - expected).abs() / expected < 1e-3,
@@ -93,7 +81,6 @@ fn hertz_static_overlap_under_gravity() {
 fn hertz_force_versus_overlap() {
     use tilth_kernel::contact::Contact;
     let m = model(&spec("hertz", None, None, None), &[]);
-    let e_eff = 1.0 / (2.0 * (1.0 - NU * NU) / E);
     let r_eff = R / 2.0;
     for delta in [1e-8, 1e-7, 1e-6, 1e-5, 5e-5] {
         let dist = 2.0 * R - delta;
@@ -110,7 +97,7 @@ fn hertz_force_versus_overlap() {
         let mut h = vec![0.0; m.history_stride()];
         let out = m.evaluate(0, 0, &c, &mut h).unwrap();
         let delta = 2.0 * R - dist; // the overlap as represented after rounding
-        let expected = 4.0 / 3.0 * e_eff * r_eff.sqrt() * delta.powf(1.5);
+        let expected = 4.0 / 3.0 * e_eff() * r_eff.sqrt() * delta.powf(1.5);
         assert!(
             (-out.force.x - expected).abs() <= 1e-12 * expected,
             "delta {delta}: {} vs {expected}",
@@ -136,15 +123,9 @@ fn coulomb_cap_on_inclined_plane() {
         );
         let mut p = tilth_kernel::particles::Particles::default();
         let mass = 4.0 / 3.0 * std::f64::consts::PI * R.powi(3) * RHO;
-        let e_eff = 1.0 / (2.0 * (1.0 - NU * NU) / E);
-        let delta = (3.0 * mass * 9.81 * th.cos() / (4.0 * e_eff * R.sqrt())).powf(2.0 / 3.0);
+        let delta = (3.0 * mass * 9.81 * th.cos() / (4.0 * e_eff() * R.sqrt())).powf(2.0 / 3.0);
         p.push(DVec3::new(0.0, 0.0, R - delta), DVec3::ZERO, R, RHO, 0);
-        let floor = Wall::new(
-            "slope",
-            Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-            0,
-            Motion::Fixed,
-        );
+        let floor = floor();
         let g = DVec3::new(9.81 * th.sin(), 0.0, -9.81 * th.cos());
         let mut s = sim(m, p, vec![floor], 1e-6, g, 1);
         s.run(20_000).unwrap(); // 0.02 s to settle
@@ -183,12 +164,7 @@ fn rolling_without_slip_on_incline() {
     );
     let mut p = tilth_kernel::particles::Particles::default();
     p.push(DVec3::new(0.0, 0.0, R), DVec3::ZERO, R, RHO, 0);
-    let floor = Wall::new(
-        "slope",
-        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-        0,
-        Motion::Fixed,
-    );
+    let floor = floor();
     let g = DVec3::new(9.81 * th.sin(), 0.0, -9.81 * th.cos());
     let mut s = sim(m, p, vec![floor], 1e-6, g, 1);
     s.run(5_000).unwrap();
@@ -225,12 +201,7 @@ fn rolling_deceleration(law: &str) -> (f64, f64, tilth_kernel::sim::Simulation) 
     let v0 = 0.1;
     p.push(DVec3::new(0.0, 0.0, R), DVec3::new(v0, 0.0, 0.0), R, RHO, 0);
     p.angular_velocity[0] = DVec3::new(0.0, v0 / R, 0.0);
-    let floor = Wall::new(
-        "floor",
-        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-        0,
-        Motion::Fixed,
-    );
+    let floor = floor();
     let mut s = sim(m, p, vec![floor], 1e-6, DVec3::new(0.0, 0.0, -9.81), 1);
     s.run(2_000).unwrap();
     let v1 = s.particles.velocity[0].x;

@@ -7,7 +7,7 @@ use glam::DVec3;
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, Setup, Simulation};
-use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric, plane::Plane};
+use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric};
 
 /// A funnel-fed pile with every law family: JKR, Mindlin, EPSD, walls of three kinds and a
 /// factory, 2,500 particles (several parallel chunks).
@@ -22,12 +22,7 @@ fn pile(threads: usize, skin: f64) -> Simulation {
         ],
     );
     let walls = vec![
-        Wall::new(
-            "floor",
-            Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-            0,
-            Motion::Fixed,
-        ),
+        floor(),
         Wall::new(
             "ring",
             Box::new(Axisymmetric::cylinder(DVec3::ZERO, DVec3::Z, 0.02, 0.01).unwrap()),

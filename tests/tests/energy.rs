@@ -12,10 +12,9 @@ use tilth_kernel::wall::{Motion, Wall, plane::Plane};
 const HALF: f64 = 0.0175;
 
 fn elastic_energy(p: &Particles) -> f64 {
-    let e_eff = 1.0 / (2.0 * (1.0 - NU * NU) / E);
     let u = |r_eff: f64, d: f64| {
         if d > 0.0 {
-            8.0 / 15.0 * e_eff * r_eff.sqrt() * d.powf(2.5)
+            8.0 / 15.0 * e_eff() * r_eff.sqrt() * d.powf(2.5)
         } else {
             0.0
         }

@@ -12,7 +12,7 @@ use glam::DVec3;
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, Setup, Simulation};
-use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric, plane::Plane};
+use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric};
 
 #[test]
 fn epsd_heap_comes_to_rest() {
@@ -42,12 +42,7 @@ fn epsd_heap_comes_to_rest() {
     })
     .unwrap();
     let walls = vec![
-        Wall::new(
-            "floor",
-            Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-            0,
-            Motion::Fixed,
-        ),
+        floor(),
         Wall::new(
             "ring",
             Box::new(Axisymmetric::cylinder(DVec3::ZERO, DVec3::Z, 0.04, 0.02).unwrap()),

@@ -8,10 +8,6 @@ use std::f64::consts::PI;
 
 const GAMMA: f64 = 0.356;
 
-fn e_eff() -> f64 {
-    1.0 / (2.0 * (1.0 - NU * NU) / E)
-}
-
 /// Force (N, positive repulsive) the model gives along a quasi-static path of overlaps.
 fn path(overlaps: &[f64]) -> Vec<Option<f64>> {
     let m = model(&spec("jkr", None, None, None), &[("surface_energy", GAMMA)]);

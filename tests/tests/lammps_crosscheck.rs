@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::Simulation;
-use tilth_kernel::wall::{Motion, Wall, plane::Plane};
+use tilth_kernel::wall::Wall;
 
 fn golden(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -56,15 +56,6 @@ fn sim_for(e: f64, mu: f64, p: Particles, walls: Vec<Wall>) -> Simulation {
         &[("restitution", e), ("friction", mu)],
     );
     sim(m, p, walls, DT, DVec3::ZERO, 1)
-}
-
-fn floor() -> Wall {
-    Wall::new(
-        "floor",
-        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-        0,
-        Motion::Fixed,
-    )
 }
 
 /// Largest |ours - LAMMPS| over the rows, relative to the largest |LAMMPS| value.
@@ -232,10 +223,8 @@ fn oblique_impacts_match_lammps() {
 fn jkr_pull_off_matches_lammps() {
     let lammps = summary("pp_jkr_pulloff", "min_force_n");
     let ours = -3.0 * std::f64::consts::PI * 0.356 * (R / 2.0);
-    let jkr = tilth_kernel::contact::laws::jkr::Jkr::new(1.0 / (2.0 * (1.0 - NU * NU) / E), 0.356);
-    let a = (9.0 * std::f64::consts::PI * 0.356 * (R / 2.0f64).powi(2)
-        / (4.0 * 1.0 / (2.0 * (1.0 - NU * NU) / E)))
-        .cbrt();
+    let jkr = tilth_kernel::contact::laws::jkr::Jkr::new(e_eff(), 0.356);
+    let a = (9.0 * std::f64::consts::PI * 0.356 * (R / 2.0f64).powi(2) / (4.0 * e_eff())).cbrt();
     let f_min = jkr.force_at_radius(a, R / 2.0);
     assert!(
         (lammps - ours).abs() / ours.abs() < 1e-6,

@@ -27,8 +27,7 @@ fn constant_radius_spring_and_cap() {
     let delta = 1e-6;
     let a = (R / 2.0 * delta).sqrt();
     let s_t = 8.0 * g_eff() * a;
-    let hertz =
-        4.0 / 3.0 * (1.0 / (2.0 * (1.0 - NU * NU) / E)) * (R / 2.0).sqrt() * delta.powf(1.5);
+    let hertz = 4.0 / 3.0 * (e_eff()) * (R / 2.0).sqrt() * delta.powf(1.5);
     let mut shift = 0.0;
     for k in 1..=2000 {
         let out = m

@@ -189,12 +189,7 @@ fn servo_platen_holds_its_target_force() {
     // One sphere on a floor under a servo platen pressing down with 0.05 N: both contacts
     // carry the target, so the overlap at each is Hertz's (3F / (4 E* sqrt(R)))^(2/3).
     let target = 0.05;
-    let floor = Wall::new(
-        "floor",
-        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
-        0,
-        Motion::Fixed,
-    );
+    let floor = floor();
     let platen = Wall::new(
         "platen",
         Box::new(Plane::new(DVec3::new(0.0, 0.0, 2.0 * R + 1e-5), -DVec3::Z).unwrap()),
@@ -220,8 +215,7 @@ fn servo_platen_holds_its_target_force() {
         (f - target).abs() / target < 1e-3,
         "platen force {f} vs target {target}"
     );
-    let e_eff = 1.0 / (2.0 * (1.0 - NU * NU) / E);
-    let delta = (3.0 * target / (4.0 * e_eff * R.sqrt())).powf(2.0 / 3.0);
+    let delta = (3.0 * target / (4.0 * e_eff() * R.sqrt())).powf(2.0 / 3.0);
     let gap = 2.0 * R + 1e-5 + s.walls[1].offset.z; // platen height
     assert!(
         (2.0 * R - gap - 2.0 * delta).abs() < 1e-3 * delta,

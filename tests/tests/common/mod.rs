@@ -7,12 +7,27 @@ use tilth_kernel::contact::{Contact, ContactModel, ModelSpec, PairSpec};
 use tilth_kernel::material::Material;
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, Setup, Simulation};
-use tilth_kernel::wall::Wall;
+use tilth_kernel::wall::{Motion, Wall, plane::Plane};
 
 pub const E: f64 = 13.5e6;
 pub const NU: f64 = 0.2;
 pub const RHO: f64 = 1380.0;
 pub const R: f64 = 1e-3;
+
+/// E* of soil on soil (or on a soil wall): 1/E* = 2 (1 - nu^2) / E, Pa.
+pub fn e_eff() -> f64 {
+    1.0 / (2.0 * (1.0 - NU * NU) / E)
+}
+
+/// A fixed soil floor: the plane z = 0, particles above it.
+pub fn floor() -> Wall {
+    Wall::new(
+        "floor",
+        Box::new(Plane::new(DVec3::ZERO, DVec3::Z).unwrap()),
+        0,
+        Motion::Fixed,
+    )
+}
 
 pub fn soil() -> Material {
     Material::new("soil", E, NU, RHO).unwrap()
