@@ -40,6 +40,9 @@ pub struct Aabb {
     pub max: DVec3,
 }
 
+/// A hook run first on each worker thread, given the worker's index.
+pub type ThreadStart = std::sync::Arc<dyn Fn(usize) + Send + Sync>;
+
 /// Everything a simulation is built from.
 pub struct Setup {
     pub model: ContactModel,
@@ -103,6 +106,16 @@ pub struct Simulation {
 impl Simulation {
     /// Checks the set-up (time step, material pairs, overlaps) and prepares the first step.
     pub fn new(setup: Setup) -> Result<Simulation> {
+        Self::with_thread_start(setup, None)
+    }
+
+    /// Like [`Simulation::new`]; `on_thread_start(k)` runs first on each worker thread
+    /// `k = 0..threads`. A front end uses it to pin workers to cores; the physics never
+    /// depends on it.
+    pub fn with_thread_start(
+        setup: Setup,
+        on_thread_start: Option<ThreadStart>,
+    ) -> Result<Simulation> {
         let Setup {
             model,
             particles,
@@ -247,12 +260,15 @@ impl Simulation {
             + walls.iter().map(|w| w.max_speed()).fold(0.0, f64::max);
         let speed_limit = 10.0 * ((2.0 * gravity.length() * height).sqrt() + imposed) + 1.0;
         let pool = std::sync::Arc::new(
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .map_err(|e| {
-                    KernelError::Invalid(format!("cannot start {threads} threads: {e}"))
-                })?,
+            {
+                let builder = rayon::ThreadPoolBuilder::new().num_threads(threads);
+                match on_thread_start {
+                    Some(hook) => builder.start_handler(move |k| hook(k)),
+                    None => builder,
+                }
+            }
+            .build()
+            .map_err(|e| KernelError::Invalid(format!("cannot start {threads} threads: {e}")))?,
         );
         let stride = model.history_stride();
         let nwalls = walls.len();

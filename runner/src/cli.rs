@@ -1,6 +1,6 @@
 //! The command-line surface.
 
-use crate::commands::{bench, laws, run};
+use crate::commands::{bench, laws, run, sweep};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -19,6 +19,11 @@ pub enum Command {
     Run(run::RunArgs),
     /// List every contact law: slot, parameters with units, ranges and defaults.
     Laws,
+    /// Parameter sweeps: plan, run (pinned cores, one MCAP per run, resumable), status, Slurm.
+    Sweep {
+        #[command(subcommand)]
+        command: sweep::SweepCommand,
+    },
     /// Speed benchmarks.
     Bench {
         #[command(subcommand)]
@@ -32,5 +37,6 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Run(args) => run::run(&args, out),
         Command::Laws => laws::laws(out),
         Command::Bench { which } => bench::bench(&which, out),
+        Command::Sweep { command } => sweep::sweep(&command, out),
     }
 }

@@ -10,6 +10,8 @@ pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod progress;
+pub mod record;
+pub mod sweep;
 
 use tilth_kernel::KernelError;
 

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Scene file (TOML); the embedded demo (sweeps/demo.toml) when omitted.
+    /// Scene file (TOML); the embedded scene (sweeps/scenes/pile.toml) when omitted.
     pub file: Option<PathBuf>,
     /// Worker threads (overrides simulation.threads; results do not depend on it).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]

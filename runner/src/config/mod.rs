@@ -27,15 +27,15 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use tilth_kernel::contact::{ContactModel, ModelSpec};
-use tilth_kernel::sim::{Setup, Simulation};
+use tilth_kernel::sim::{Setup, Simulation, ThreadStart};
 
 /// The only scene format this build reads.
 pub const FORMAT_VERSION: i64 = 1;
 
 /// The demo scene, embedded so that `tilth run` works from any directory.
-pub const DEMO: &str = include_str!("../../../sweeps/demo.toml");
+pub const DEMO: &str = include_str!("../../../sweeps/scenes/pile.toml");
 /// The name the embedded demo goes by in messages.
-pub const DEMO_NAME: &str = "sweeps/demo.toml (embedded)";
+pub const DEMO_NAME: &str = "sweeps/scenes/pile.toml (embedded)";
 
 /// A whole scene file.
 #[derive(Debug, Deserialize)]
@@ -128,6 +128,16 @@ impl Scene {
     /// Checks every value and builds the simulation. `origin` names the scene in the summary;
     /// mesh files are looked up relative to `base_dir`.
     pub fn resolve(self, origin: &str, base_dir: &Path, threads: Option<usize>) -> Result<Loaded> {
+        self.prepare(origin, base_dir, threads)?.start(None)
+    }
+
+    /// Checks every value and builds the kernel's set-up without starting the simulation.
+    pub fn prepare(
+        self,
+        origin: &str,
+        base_dir: &Path,
+        threads: Option<usize>,
+    ) -> Result<Prepared> {
         let materials = materials::resolve(&self.materials)?;
         let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
         let spec = ModelSpec {
@@ -170,14 +180,61 @@ impl Scene {
             threads,
             domain: sim.domain,
         };
-        Ok(Loaded {
-            sim: Simulation::new(setup)?,
+        let wall_shapes = self
+            .walls
+            .iter()
+            .map(|w| w.shape.drawing(base_dir))
+            .collect();
+        Ok(Prepared {
+            setup,
             threads,
             steps: sim.steps,
             sample_every,
             info,
+            wall_shapes,
         })
     }
+}
+
+/// A checked scene whose simulation has not started.
+pub struct Prepared {
+    pub setup: Setup,
+    pub threads: usize,
+    pub steps: u64,
+    pub sample_every: Option<u64>,
+    pub info: SceneInfo,
+    /// How each wall is drawn in recordings.
+    pub wall_shapes: Vec<crate::record::WallShape>,
+}
+
+impl Prepared {
+    /// Starts the simulation; `thread_start` runs first on each worker (to pin it).
+    pub fn start(self, thread_start: Option<ThreadStart>) -> Result<Loaded> {
+        Ok(Loaded {
+            sim: Simulation::with_thread_start(self.setup, thread_start)?,
+            threads: self.threads,
+            steps: self.steps,
+            sample_every: self.sample_every,
+            info: self.info,
+        })
+    }
+}
+
+/// Deserializes a scene from a TOML value (a sweep run's scene with its factor values set)
+/// and prepares it; `origin` names it in messages.
+pub fn prepare_value(
+    value: toml::Value,
+    origin: &str,
+    base_dir: &Path,
+    threads: Option<usize>,
+) -> Result<Prepared> {
+    let scene: Scene = value.try_into().map_err(|e: toml::de::Error| {
+        anyhow::anyhow!(
+            "{}",
+            e.message().split_whitespace().collect::<Vec<_>>().join(" ")
+        )
+    })?;
+    scene.prepare(origin, base_dir, threads)
 }
 
 /// `load` or the embedded demo when `path` is `None`.

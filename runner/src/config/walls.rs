@@ -6,6 +6,7 @@
 //! `mesh` {file, scale} (an STL file, relative to the scene file's directory). Lengths in m.
 
 use super::check;
+use crate::record::WallShape;
 use anyhow::{Result, anyhow, bail};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -114,6 +115,66 @@ pub enum ShapeSection {
         #[serde(default = "unit_scale")]
         scale: f64,
     },
+}
+
+impl ShapeSection {
+    /// How the wall is drawn in recordings (a mesh that cannot be read is drawn empty; the
+    /// run itself reports the error).
+    pub fn drawing(&self, base_dir: &Path) -> WallShape {
+        match self {
+            ShapeSection::Plane { point, normal } => WallShape::Plane {
+                point: *point,
+                normal: *normal,
+                half_width: 0.1,
+            },
+            ShapeSection::Disc {
+                centre,
+                axis,
+                radius,
+            } => WallShape::Axisymmetric {
+                base: *centre,
+                axis: *axis,
+                radius_base: *radius,
+                radius_top: *radius,
+                length: 0.0,
+            },
+            ShapeSection::Cylinder {
+                base,
+                axis,
+                radius,
+                length,
+            } => WallShape::Axisymmetric {
+                base: *base,
+                axis: *axis,
+                radius_base: *radius,
+                radius_top: *radius,
+                length: *length,
+            },
+            ShapeSection::Cone {
+                base,
+                axis,
+                radius_base,
+                radius_top,
+                length,
+            } => WallShape::Axisymmetric {
+                base: *base,
+                axis: *axis,
+                radius_base: *radius_base,
+                radius_top: *radius_top,
+                length: *length,
+            },
+            ShapeSection::Mesh { file, scale } => WallShape::Mesh {
+                triangles: Mesh::from_stl(&base_dir.join(file), *scale)
+                    .map(|m| {
+                        m.triangles
+                            .iter()
+                            .map(|t| t.map(|v| v.to_array()))
+                            .collect()
+                    })
+                    .unwrap_or_default(),
+            },
+        }
+    }
 }
 
 fn unit_scale() -> f64 {

@@ -68,8 +68,8 @@ fn the_demo_loads_embedded_and_from_disk() {
     let embedded = config::load_or_demo(None, None).unwrap();
     assert_eq!(embedded.info.origin, config::DEMO_NAME);
     assert_eq!(embedded.steps, 60_000);
-    assert_eq!(embedded.sim.factories[0].spec.count, 2000);
-    let on_disk = concat!(env!("CARGO_MANIFEST_DIR"), "/../sweeps/demo.toml");
+    assert_eq!(embedded.sim.factories[0].spec.count, 1500);
+    let on_disk = concat!(env!("CARGO_MANIFEST_DIR"), "/../sweeps/scenes/pile.toml");
     assert_eq!(std::fs::read_to_string(on_disk).unwrap(), config::DEMO);
 }
 

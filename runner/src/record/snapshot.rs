@@ -1,0 +1,100 @@
+//! What the simulation thread hands to the writer: compact copies taken between steps.
+
+use tilth_kernel::sim::Simulation;
+
+/// Bytes per point in `/particles`: x, y, z, radius, speed (f32), id, material (u32).
+pub const POINT_STRIDE: usize = 28;
+
+/// One frame of one channel group, stamped with simulated time (s).
+#[derive(Debug, Clone)]
+pub enum Record {
+    /// Every particle, packed as [`POINT_STRIDE`]-byte little-endian points.
+    Particles {
+        time: f64,
+        count: u32,
+        points: Vec<u8>,
+    },
+    /// Each wall's displacement from its initial pose (m), force and torque (N, N m).
+    Walls {
+        time: f64,
+        offsets: Vec<[f64; 3]>,
+        forces: Vec<[f64; 3]>,
+        torques: Vec<[f64; 3]>,
+    },
+    /// Named scalar values, one topic `/scalars/<name>` each.
+    Scalars {
+        time: f64,
+        values: Vec<(String, f64)>,
+    },
+}
+
+/// How a wall is drawn (its initial pose; the recorded offset moves it).
+#[derive(Debug, Clone)]
+pub enum WallShape {
+    /// Drawn as a thin square of `half_width` around `point`.
+    Plane {
+        point: [f64; 3],
+        normal: [f64; 3],
+        half_width: f64,
+    },
+    /// A cylinder, cone frustum or disc (length 0) along `axis` from `base`.
+    Axisymmetric {
+        base: [f64; 3],
+        axis: [f64; 3],
+        radius_base: f64,
+        radius_top: f64,
+        length: f64,
+    },
+    /// Triangles (m), drawn as a triangle list.
+    Mesh { triangles: Vec<[[f64; 3]; 3]> },
+}
+
+/// Packs every particle of `sim` into a [`Record::Particles`].
+pub fn particles(sim: &Simulation) -> Record {
+    let p = &sim.particles;
+    let mut points = Vec::with_capacity(p.len() * POINT_STRIDE);
+    for k in 0..p.len() {
+        let x = p.position[k];
+        for v in [
+            x.x as f32,
+            x.y as f32,
+            x.z as f32,
+            p.radius[k] as f32,
+            p.velocity[k].length() as f32,
+        ] {
+            points.extend_from_slice(&v.to_le_bytes());
+        }
+        points.extend_from_slice(&p.id[k].to_le_bytes());
+        points.extend_from_slice(&(p.material[k] as u32).to_le_bytes());
+    }
+    Record::Particles {
+        time: sim.time,
+        count: p.len() as u32,
+        points,
+    }
+}
+
+/// Wall offsets, forces and torques of `sim`.
+pub fn walls(sim: &Simulation) -> Record {
+    Record::Walls {
+        time: sim.time,
+        offsets: sim.walls.iter().map(|w| w.offset.to_array()).collect(),
+        forces: sim.walls.iter().map(|w| w.force.to_array()).collect(),
+        torques: sim.walls.iter().map(|w| w.torque.to_array()).collect(),
+    }
+}
+
+/// The standard scalar channels of `sim`, plus `extra` (an observable as it develops).
+pub fn scalars(sim: &Simulation, extra: &[(String, f64)]) -> Record {
+    let (pp, pw) = sim.contact_counts();
+    let mut values = vec![
+        ("kinetic_energy".to_string(), sim.particles.kinetic_energy()),
+        ("particles".to_string(), sim.particles.len() as f64),
+        ("contacts".to_string(), (pp + pw) as f64),
+    ];
+    values.extend(extra.iter().cloned());
+    Record::Scalars {
+        time: sim.time,
+        values,
+    }
+}

@@ -1,0 +1,451 @@
+//! A sweep file expanded into runs, each checked against the scene before anything runs.
+
+use super::design::{self, Expanded};
+use super::file::{self, FactorSection, Source, SweepFile};
+use super::target;
+use crate::config;
+use crate::record::RecordSection;
+use anyhow::{Context, Result, anyhow};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The demo sweep and its scene, embedded so that `tilth sweep run` works anywhere.
+pub const DEMO_SWEEP: &str = include_str!("../../../sweeps/demo.toml");
+pub const DEMO_SCENE: &str = include_str!("../../../sweeps/scenes/pile.toml");
+/// The scene path the demo sweep names.
+const DEMO_SCENE_PATH: &str = "scenes/pile.toml";
+
+/// A factor as the plan shows it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Factor {
+    pub name: String,
+    pub target: String,
+    pub label: Option<String>,
+    pub unit: Option<String>,
+    /// Real value at coded -1 (or the lowest level).
+    pub low: f64,
+    /// Real value at coded +1 (or the highest level).
+    pub high: f64,
+}
+
+/// One run of the sweep.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct PlannedRun {
+    /// Run number, 1-based, in run order.
+    pub id: usize,
+    /// Standard-order number, 1-based.
+    pub std: usize,
+    /// Replicate, 1-based.
+    pub replicate: usize,
+    /// Factor name -> coded value.
+    pub coded: BTreeMap<String, f64>,
+    /// Factor name -> real value.
+    pub values: BTreeMap<String, f64>,
+    pub seed: u64,
+}
+
+/// A scene as text, with the name and directory it came from.
+#[derive(Debug, Clone)]
+pub struct SceneSource {
+    pub origin: String,
+    pub dir: PathBuf,
+    pub text: String,
+}
+
+/// An expanded, checked sweep.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub name: String,
+    /// The sweep file (or the embedded demo's name).
+    pub origin: String,
+    pub sweep_text: String,
+    pub description: Option<String>,
+    /// The design in words.
+    pub title: String,
+    pub factors: Vec<Factor>,
+    pub runs: Vec<PlannedRun>,
+    pub scene: SceneSource,
+    /// Scene values set in every run (path, value).
+    pub fixed: Vec<(String, toml::Value)>,
+    /// Threads per run.
+    pub threads: usize,
+    pub record: RecordSection,
+    /// Fingerprint of the sweep and scene texts: a resumed sweep must match it.
+    pub fingerprint: String,
+}
+
+/// FNV-1a, 64 bit: a fingerprint that stays the same across builds and platforms.
+pub fn fnv1a(parts: &[&str]) -> String {
+    let mut h: u64 = 0xcbf29ce484222325;
+    for p in parts {
+        for b in p.bytes().chain([0xff]) {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x100000001b3);
+        }
+    }
+    format!("{h:016x}")
+}
+
+impl Plan {
+    /// Reads the sweep at `path`, or the embedded demo when `None`, and checks every run.
+    pub fn load(path: Option<&Path>) -> Result<Plan> {
+        let source = match path {
+            Some(p) => Source {
+                path: p.to_path_buf(),
+                text: std::fs::read_to_string(p)
+                    .with_context(|| format!("{}: cannot read", p.display()))?,
+            },
+            None => Source {
+                path: PathBuf::from("sweeps/demo.toml (embedded)"),
+                text: DEMO_SWEEP.to_string(),
+            },
+        };
+        let sweep = file::parse(&source)?;
+        let scene_path = sweep.experiment.scene.get_ref();
+        let scene = match path {
+            None if scene_path == DEMO_SCENE_PATH => SceneSource {
+                origin: "sweeps/scenes/pile.toml (embedded)".into(),
+                dir: PathBuf::from("."),
+                text: DEMO_SCENE.to_string(),
+            },
+            _ => {
+                let p = source.dir().join(scene_path);
+                let text = std::fs::read_to_string(&p).map_err(|e| {
+                    source.err(
+                        &sweep.experiment.scene.span(),
+                        format!("experiment.scene: cannot read {}: {e}", p.display()),
+                    )
+                })?;
+                SceneSource {
+                    origin: p.display().to_string(),
+                    dir: p.parent().map(Path::to_path_buf).unwrap_or_default(),
+                    text,
+                }
+            }
+        };
+        let plan = Self::expand(&source, sweep, scene)?;
+        plan.check(&source)?;
+        Ok(plan)
+    }
+
+    fn expand(source: &Source, sweep: SweepFile, scene: SceneSource) -> Result<Plan> {
+        let factors: Vec<&FactorSection> = sweep.factors.iter().map(|f| f.get_ref()).collect();
+        let Expanded {
+            title,
+            rows,
+            order,
+            replicates,
+            seed,
+        } = design::expand(source, &sweep.design, &factors)?;
+        let mut runs = vec![];
+        for r in 0..replicates {
+            for &std in &order {
+                let id = runs.len() + 1;
+                let coded: BTreeMap<String, f64> = factors
+                    .iter()
+                    .zip(&rows[std])
+                    .map(|(f, &c)| (f.name.get_ref().clone(), c))
+                    .collect();
+                let values = factors
+                    .iter()
+                    .zip(&rows[std])
+                    .map(|(f, &c)| (f.name.get_ref().clone(), f.real(c)))
+                    .collect();
+                runs.push(PlannedRun {
+                    id,
+                    std: std + 1,
+                    replicate: r + 1,
+                    coded,
+                    values,
+                    seed: seed + id as u64 - 1,
+                });
+            }
+        }
+        let factors_out = factors
+            .iter()
+            .map(|f| Factor {
+                name: f.name.get_ref().clone(),
+                target: f.target.get_ref().clone(),
+                label: f.label.clone(),
+                unit: f.unit.clone(),
+                low: f
+                    .low
+                    .unwrap_or_else(|| f.levels.as_ref().map_or(f64::NAN, |l| l[0])),
+                high: f
+                    .high
+                    .unwrap_or_else(|| f.levels.as_ref().map_or(f64::NAN, |l| l[l.len() - 1])),
+            })
+            .collect();
+        let name = sweep.name.clone().unwrap_or_else(|| {
+            source
+                .path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "sweep".into())
+        });
+        Ok(Plan {
+            name,
+            origin: source.path.display().to_string(),
+            sweep_text: source.text.clone(),
+            description: sweep.description.clone(),
+            title,
+            factors: factors_out,
+            runs,
+            fingerprint: fnv1a(&[&source.text, &scene.text]),
+            scene,
+            fixed: sweep
+                .fixed
+                .iter()
+                .map(|(k, v)| (k.clone(), v.get_ref().clone()))
+                .collect(),
+            threads: *sweep.experiment.threads.get_ref(),
+            record: sweep.record.clone(),
+        })
+        .map(|p| p.with_spans(sweep))
+    }
+
+    fn with_spans(self, _sweep: SweepFile) -> Plan {
+        self
+    }
+
+    /// The base scene with the fixed values set.
+    fn base_scene(&self) -> Result<toml::Value> {
+        let mut v: toml::Value = toml::from_str(&self.scene.text)
+            .map_err(|e| anyhow!("{}: {}", self.scene.origin, e.message()))?;
+        for (path, value) in &self.fixed {
+            target::set(&mut v, path, value.clone())
+                .map_err(|e| anyhow!("fixed `{path}`: {e} in {}", self.scene.origin))?;
+        }
+        Ok(v)
+    }
+
+    /// The scene of `run`: fixed values, factor values and the seed set.
+    pub fn scene_for(&self, run: &PlannedRun) -> Result<toml::Value> {
+        let mut v = self.base_scene()?;
+        for f in &self.factors {
+            target::set(&mut v, &f.target, toml::Value::Float(run.values[&f.name]))?;
+        }
+        target::set(
+            &mut v,
+            "simulation.seed",
+            toml::Value::Integer(run.seed as i64),
+        )?;
+        Ok(v)
+    }
+
+    /// Refuses the sweep before anything runs: every fixed value, every factor at each of
+    /// its levels and then every whole run must give a valid scene.
+    fn check(&self, source: &Source) -> Result<()> {
+        let sweep: SweepFile = file::parse(source)?;
+        self.record
+            .resolve(1e-9)
+            .map_err(|e| anyhow!("{}: [record] {e}", source.path.display()))?;
+        let base = {
+            let mut v: toml::Value = toml::from_str(&self.scene.text)
+                .map_err(|e| anyhow!("{}: {}", self.scene.origin, e.message()))?;
+            for (path, value) in &sweep.fixed {
+                let span = value.span();
+                target::set(&mut v, path, value.get_ref().clone())
+                    .map_err(|e| source.err(&span, format!("fixed `{path}`: {e}")))?;
+            }
+            v
+        };
+        let prepare = |v: toml::Value| {
+            config::prepare_value(v, &self.scene.origin, &self.scene.dir, Some(self.threads))
+                .map(|_| ())
+        };
+        prepare(base.clone()).map_err(|e| {
+            anyhow!(
+                "{}: the scene {} with the sweep's fixed values is not valid: {e:#}",
+                source.path.display(),
+                self.scene.origin
+            )
+        })?;
+        for (f, spanned) in self.factors.iter().zip(&sweep.factors) {
+            let mut levels: Vec<(f64, usize)> = vec![];
+            for run in &self.runs {
+                let x = run.values[&f.name];
+                if !levels.iter().any(|(l, _)| *l == x) {
+                    levels.push((x, run.id));
+                }
+            }
+            for (x, id) in levels {
+                let span = spanned.get_ref().target.span();
+                let mut v = base.clone();
+                target::set(&mut v, &f.target, toml::Value::Float(x)).map_err(|e| {
+                    source.err(&span, format!("factor `{}`: unknown target: {e}", f.name))
+                })?;
+                prepare(v).map_err(|e| {
+                    source.err(
+                        &spanned.span(),
+                        format!(
+                            "factor `{}` = {x} (run {id}) is not allowed for `{}`: {}",
+                            f.name,
+                            f.target,
+                            innermost(&e)
+                        ),
+                    )
+                })?;
+            }
+        }
+        for run in &self.runs {
+            prepare(self.scene_for(run)?).map_err(|e| {
+                anyhow!(
+                    "{}: run {} ({}) is not a valid scene: {}",
+                    source.path.display(),
+                    run.id,
+                    describe(&run.values),
+                    innermost(&e)
+                )
+            })?;
+        }
+        Ok(())
+    }
+
+    /// The plan as JSON: `{name, design, factors, runs: [{id, coded, values, seed, ...}]}`.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "name": self.name,
+            "sweep": self.origin,
+            "design": self.title,
+            "scene": self.scene.origin,
+            "threads_per_run": self.threads,
+            "factors": self.factors,
+            "runs": self.runs,
+        })
+    }
+
+    /// The plan as a table, coded and real values side by side.
+    pub fn write_table(&self, out: &mut dyn Write) -> Result<()> {
+        writeln!(
+            out,
+            "{}: {}; {} runs",
+            self.name,
+            self.title,
+            self.runs.len()
+        )?;
+        if let Some(d) = &self.description {
+            writeln!(out, "{}", d.trim())?;
+        }
+        writeln!(
+            out,
+            "scene {}, {} thread(s) per run\n",
+            self.scene.origin, self.threads
+        )?;
+        let nw = self
+            .factors
+            .iter()
+            .map(|f| f.name.len())
+            .max()
+            .unwrap_or(4)
+            .max(6);
+        let tw = self
+            .factors
+            .iter()
+            .map(|f| f.target.len())
+            .max()
+            .unwrap_or(6)
+            .max(6);
+        writeln!(
+            out,
+            "{:nw$}  {:tw$}  {:>10}  {:>10}  label",
+            "factor", "target", "low (-1)", "high (+1)"
+        )?;
+        for f in &self.factors {
+            writeln!(
+                out,
+                "{:nw$}  {:tw$}  {:>10}  {:>10}  {}{}",
+                f.name,
+                f.target,
+                num(f.low),
+                num(f.high),
+                f.label.as_deref().unwrap_or(""),
+                f.unit
+                    .as_ref()
+                    .map(|u| format!(" ({u})"))
+                    .unwrap_or_default()
+            )?;
+        }
+        writeln!(out)?;
+        let cw = self
+            .factors
+            .iter()
+            .map(|f| f.name.len())
+            .max()
+            .unwrap_or(2)
+            .max(6);
+        let mut head = format!("{:>4}  {:>4}  {:>4}  {:>6} |", "run", "std", "rep", "seed");
+        for f in &self.factors {
+            head += &format!(" {:>cw$}", f.name);
+        }
+        head += " |";
+        for f in &self.factors {
+            head += &format!(" {:>10}", f.name);
+        }
+        writeln!(
+            out,
+            "{:>27}{:^w$}| real values",
+            "",
+            "coded",
+            w = (cw + 1) * self.factors.len() + 1
+        )?;
+        writeln!(out, "{head}")?;
+        for r in &self.runs {
+            let mut line = format!(
+                "{:>4}  {:>4}  {:>4}  {:>6} |",
+                r.id, r.std, r.replicate, r.seed
+            );
+            for f in &self.factors {
+                line += &format!(" {:>cw$}", coded(r.coded[&f.name]));
+            }
+            line += " |";
+            for f in &self.factors {
+                line += &format!(" {:>10}", num(r.values[&f.name]));
+            }
+            writeln!(out, "{line}")?;
+        }
+        Ok(())
+    }
+}
+
+/// The last (most specific) message of an error chain, on one line.
+pub fn innermost(e: &anyhow::Error) -> String {
+    e.chain()
+        .last()
+        .map(|c| c.to_string())
+        .unwrap_or_default()
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// `x1 = 0.2, x2 = 0.5`.
+pub fn describe(values: &BTreeMap<String, f64>) -> String {
+    values
+        .iter()
+        .map(|(k, v)| format!("{k} = {}", num(*v)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A coded value: `+1`, `-1`, `0`, or three decimals.
+fn coded(c: f64) -> String {
+    if c == c.round() {
+        if c > 0.0 {
+            format!("+{c:.0}")
+        } else {
+            format!("{c:.0}")
+        }
+    } else {
+        format!("{c:+.3}")
+    }
+}
+
+/// A real value in at most 6 significant digits, without trailing zeros.
+pub fn num(x: f64) -> String {
+    let s = format!("{x:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.to_string() }
+}
