@@ -15,16 +15,27 @@ pub mod sweep;
 
 use tilth_kernel::KernelError;
 
+/// The git commit this binary was built from (`-dirty` with uncommitted changes).
+pub const GIT_COMMIT: &str = env!("TILTH_GIT_COMMIT");
+
 /// Exit code for success.
 pub const EXIT_OK: u8 = 0;
 /// Exit code when the simulation itself failed.
 pub const EXIT_RUN_FAILED: u8 = 1;
+/// Exit code of a sweep stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report).
+pub const EXIT_INTERRUPTED: u8 = 130;
 /// Exit code for bad input (scene file, arguments).
 pub const EXIT_BAD_INPUT: u8 = 2;
 
 /// The exit code for an error: [`EXIT_RUN_FAILED`] when the kernel stopped a run,
 /// [`EXIT_BAD_INPUT`] otherwise.
 pub fn exit_code(err: &anyhow::Error) -> u8 {
+    use commands::sweep::SweepEnd;
+    match err.downcast_ref::<SweepEnd>() {
+        Some(SweepEnd::Interrupted) => return EXIT_INTERRUPTED,
+        Some(SweepEnd::Failed(_)) => return EXIT_RUN_FAILED,
+        None => {}
+    }
     let blew_up = err.chain().any(|e| {
         matches!(
             e.downcast_ref::<KernelError>(),

@@ -32,7 +32,12 @@ A run killed mid-way leaves a truncated file without a summary or footer
 saying it is "incomplete". With --allow-partial it is read as a stream from the
 start, and the report says how many messages could be read and decoded before
 the truncation; a partial file fails only if something before the truncation is
-wrong (or if not a single message could be read).
+wrong (or if not a single message could be read). A run that stopped early but
+closed its file keeps the .partial name with a complete MCAP structure: that too
+is "incomplete" without --allow-partial, and is read in full with it.
+
+Other topics than tilth's are allowed if their schema is a Foxglove one (e.g. the
+optional /spheres SceneUpdate); they get the generic checks of their type.
 """
 
 from __future__ import annotations
@@ -310,29 +315,34 @@ def check_point_cloud(msg, where: str, tilth_layout: bool) -> int:
     return n
 
 
-def check_scene_update(msg, where: str) -> List[str]:
+def check_scene_update(msg, where: str, walls: bool) -> List[str]:
+    """Checks a foxglove.SceneUpdate; with walls=True (the /walls topic) also tilth's wall rules."""
     ids = []
     for e in msg.entities:
-        if not e.id:
+        if not e.id and walls:
             raise CheckFailure(f"{where}: SceneEntity without an id (tilth uses the wall name)")
         if e.id in ids:
             raise CheckFailure(f"{where}: SceneEntity id {e.id!r} appears twice")
         ids.append(e.id)
         n_prims = len(e.cylinders) + len(e.cubes) + len(e.triangles)
-        if n_prims == 0:
+        if walls and n_prims == 0:
             raise CheckFailure(f"{where}: wall {e.id!r} has no Cylinder/Cube/TriangleList primitive")
+        for sp in e.spheres:
+            _check_pose(sp.pose, f"{where}: entity {e.id!r} sphere")
+            if not _finite(sp.size.x, sp.size.y, sp.size.z) or min(sp.size.x, sp.size.y, sp.size.z) <= 0:
+                raise CheckFailure(f"{where}: entity {e.id!r} has a sphere with an invalid size")
         for c in list(e.cylinders) + list(e.cubes):
-            _check_pose(c.pose, f"{where}: wall {e.id!r}")
+            _check_pose(c.pose, f"{where}: entity {e.id!r}")
             if not _finite(c.size.x, c.size.y, c.size.z) or min(c.size.x, c.size.y, c.size.z) < 0:
-                raise CheckFailure(f"{where}: wall {e.id!r} has an invalid size")
+                raise CheckFailure(f"{where}: entity {e.id!r} has a cube/cylinder with an invalid size")
         for t in e.triangles:
             n_idx = len(t.indices) if len(t.indices) else len(t.points)
             if n_idx % 3:
-                raise CheckFailure(f"{where}: wall {e.id!r} TriangleList has {n_idx} vertices, not a multiple of 3")
+                raise CheckFailure(f"{where}: entity {e.id!r} TriangleList has {n_idx} vertices, not a multiple of 3")
             if len(t.indices) and max(t.indices) >= len(t.points):
-                raise CheckFailure(f"{where}: wall {e.id!r} TriangleList index out of range")
+                raise CheckFailure(f"{where}: entity {e.id!r} TriangleList index out of range")
             if t.colors and len(t.colors) != len(t.points):
-                raise CheckFailure(f"{where}: wall {e.id!r} TriangleList colors/points length mismatch")
+                raise CheckFailure(f"{where}: entity {e.id!r} TriangleList colors/points length mismatch")
     return ids
 
 
@@ -430,7 +440,14 @@ class FileChecker:
             if expected and cls.DESCRIPTOR.full_name != expected:
                 raise CheckFailure(f"channel {topic!r} has schema {cls.DESCRIPTOR.full_name}, tilth writes {expected}")
             t = self.r.topics[topic] = OrderedDict(
-                [("schema", schema.name), ("messages", 0), ("decoded", 0), ("first_ns", None), ("last_ns", None)]
+                [
+                    ("schema", schema.name),
+                    ("unit", dict(channel.metadata).get("unit")),
+                    ("messages", 0),
+                    ("decoded", 0),
+                    ("first_ns", None),
+                    ("last_ns", None),
+                ]
             )
         cls = self.on_schema(schema, channel)
         where = f"{topic} @ log_time {message.log_time}"
@@ -474,7 +491,7 @@ class FileChecker:
                     self.r.first_cloud = {"log_time_ns": ns, "particles": n}
                 self.r.last_cloud = {"log_time_ns": ns, "particles": n}
         elif name == "foxglove.SceneUpdate":
-            ids = check_scene_update(msg, where)
+            ids = check_scene_update(msg, where, walls=(topic == WALLS_TOPIC))
             if topic == WALLS_TOPIC:
                 for i in ids:
                     if i not in self.r.walls:
@@ -618,6 +635,12 @@ def check_file(path: str, allow_partial: bool) -> Report:
             raise CheckFailure("no such file")
         why = file_is_complete(path)
         report.complete = why is None
+        named_partial = path.endswith(".partial")
+        if why is None and named_partial and not allow_partial:
+            raise CheckFailure(
+                "incomplete run: the file is named .partial (tilth stopped before the end of the run and "
+                "kept the .partial name), although its MCAP structure is complete. Use --allow-partial to accept it"
+            )
         if why is None:
             check_complete(path, report)
         elif not allow_partial:
@@ -627,8 +650,10 @@ def check_file(path: str, allow_partial: bool) -> Report:
             )
         else:
             check_partial(path, report)
-        if path.endswith(".partial") and report.complete:
-            report.warnings.append("file is named .partial but is a complete MCAP file")
+        if named_partial and report.complete:
+            report.warnings.append(
+                "named .partial: a run that stopped early but closed its file (summary present); all of it was read"
+            )
     except CheckFailure as e:
         report.ok = False
         report.error = str(e)
@@ -663,7 +688,8 @@ def print_text(rep: Report, out) -> None:
     if rep.topics:
         w = max(len(t) for t in rep.topics)
         for topic, t in rep.topics.items():
-            print(f"   {topic:<{w}}  {t['messages']:>7} msgs  {t['decoded']:>7} decoded  {t['schema']}", file=out)
+            unit = f"  [{t['unit']}]" if t.get("unit") else ""
+            print(f"   {topic:<{w}}  {t['messages']:>7} msgs  {t['decoded']:>7} decoded  {t['schema']}{unit}", file=out)
     if rep.first_cloud:
         print(
             f"   particles: first cloud {rep.first_cloud['particles']} @ {_fmt_ns(rep.first_cloud['log_time_ns'])}, "

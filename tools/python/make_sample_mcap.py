@@ -10,13 +10,16 @@ check_rrd.py can be developed and tested without the Rust writer:
 Layout (the contract with tilth's Rust writer):
   * profile "" (or "protobuf" with --profile protobuf), zstd chunks;
   * every channel: message_encoding "protobuf"; schema encoding "protobuf",
-    schema name = Foxglove type name, schema data = FileDescriptorSet;
+    schema name = Foxglove type name, schema data = FileDescriptorSet (one schema
+    per type, shared by its channels); channel metadata "unit" where there is one;
   * log_time = publish_time = simulated time in ns;
   * /particles              foxglove.PointCloud, frame "world", identity pose,
+                            timestamp = simulated time,
                             stride 28: x y z radius speed (FLOAT32 @0..16),
                             id material (UINT32 @20, @24); metres, m/s
   * /walls                  foxglove.SceneUpdate, one entity per wall
                             (id = wall name) with a Cylinder/Cube/TriangleList
+  * /spheres                (only with --spheres) foxglove.SceneUpdate, a sphere per particle
   * /walls/<name>/force     foxglove.Vector3 (N)
   * /walls/<name>/torque    foxglove.Vector3 (N m)
   * /scalars/<name>         foxglove.Vector3, value in x, y = z = 0
@@ -46,8 +49,10 @@ from foxglove_schemas_protobuf.SceneEntity_pb2 import SceneEntity
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
 from foxglove_schemas_protobuf.TriangleListPrimitive_pb2 import TriangleListPrimitive
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
+from foxglove_schemas_protobuf.SpherePrimitive_pb2 import SpherePrimitive
 from mcap.writer import CompressionType
-from mcap_protobuf.writer import Writer
+from mcap.writer import Writer as McapWriter
+from mcap_protobuf.schema import build_file_descriptor_set
 
 # The point layout of /particles (name, type, offset); stride 28 bytes.
 F = PackedElementField
@@ -79,6 +84,38 @@ SCALARS = {
     "contacts": ("1", "number of active particle-particle and particle-wall contacts"),
     "particles": ("1", "number of particles in the domain"),
 }
+
+
+class TopicWriter:
+    """Like tilth's Rust writer: one schema per message type (shared by channels), a "unit"
+    in the channel metadata where there is one, per-channel sequence numbers, and
+    log_time = publish_time = simulated time."""
+
+    def __init__(self, out, chunk_size: int, profile: str):
+        self.w = McapWriter(out, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+        self.w.start(profile=profile, library="tilth sample (tools/python/make_sample_mcap.py)")
+        self.schemas = {}
+        self.channels = {}
+
+    def add_metadata(self, name, data):
+        self.w.add_metadata(name, data)
+
+    def write(self, topic: str, msg, ns: int, unit: str | None = None) -> None:
+        if topic not in self.channels:
+            cls = type(msg)
+            name = cls.DESCRIPTOR.full_name
+            if name not in self.schemas:
+                fds = build_file_descriptor_set(cls).SerializeToString()
+                self.schemas[name] = self.w.register_schema(name=name, encoding="protobuf", data=fds)
+            meta = {"unit": unit} if unit else {}
+            cid = self.w.register_channel(topic=topic, message_encoding="protobuf", schema_id=self.schemas[name], metadata=meta)
+            self.channels[topic] = [cid, 0]
+        ch = self.channels[topic]
+        self.w.add_message(channel_id=ch[0], log_time=ns, publish_time=ns, sequence=ch[1], data=msg.SerializeToString())
+        ch[1] += 1
+
+    def finish(self):
+        self.w.finish()
 
 
 def identity_pose(x: float = 0.0, y: float = 0.0, z: float = 0.0, q=(0.0, 0.0, 0.0, 1.0)) -> Pose:
@@ -164,12 +201,14 @@ def particle_state(rng: np.random.Generator, n_max: int, frames: int):
     return r, phi, y, radius, material, per_frame
 
 
-def write_sample(path_or_file, frames: int, n_max: int, dt: float, profile: str, chunk_size: int, seed: int) -> None:
+def write_sample(
+    path_or_file, frames: int, n_max: int, dt: float, profile: str, chunk_size: int, seed: int, spheres: bool = False
+) -> None:
     rng = np.random.default_rng(seed)
     r, phi0, y, radius, material, per_frame = particle_state(rng, n_max, frames)
     ids = np.arange(n_max, dtype=np.uint32)
 
-    writer = Writer(path_or_file, chunk_size=chunk_size, compression=CompressionType.ZSTD, profile=profile)
+    writer = TopicWriter(path_or_file, chunk_size=chunk_size, profile=profile)
     writer.add_metadata(
         "tilth.run",
         {
@@ -217,20 +256,34 @@ def write_sample(path_or_file, frames: int, n_max: int, dt: float, profile: str,
         cloud["id"] = ids[:n]
         cloud["material"] = material[:n]
 
-        writer.write_message(
-            "/particles",
-            PointCloud(
-                frame_id="world",
-                pose=identity_pose(),
-                point_stride=POINT_STRIDE,
-                fields=fields,
-                data=cloud.tobytes(),
-            ),
-            log_time=ns,
-            publish_time=ns,
-        )
+        if spheres:  # tilth's optional /spheres: every particle as a SpherePrimitive
+            sph = SceneEntity(frame_id="world", id="particles")
+            sph.timestamp.FromNanoseconds(ns)
+            for p in cloud:
+                d = 2.0 * float(p["radius"])
+                sph.spheres.append(
+                    SpherePrimitive(
+                        pose=identity_pose(float(p["x"]), float(p["y"]), float(p["z"])),
+                        size=Vector3(x=d, y=d, z=d),
+                        color=Color(r=min(1.0, float(p["speed"]) / 0.25), g=0.3, b=0.5, a=1.0),
+                    )
+                )
+            writer.write("/spheres", SceneUpdate(entities=[sph]), ns)
 
-        writer.write_message("/walls", walls_update(t), log_time=ns, publish_time=ns)
+        pc = PointCloud(
+            frame_id="world",
+            pose=identity_pose(),
+            point_stride=POINT_STRIDE,
+            fields=fields,
+            data=cloud.tobytes(),
+        )
+        pc.timestamp.FromNanoseconds(ns)  # as tilth does: Rerun's importer makes a "timestamp" timeline of it
+        writer.write("/particles", pc, ns)
+
+        walls = walls_update(t)
+        for e in walls.entities:
+            e.timestamp.FromNanoseconds(ns)
+        writer.write("/walls", walls, ns)
 
         weight = float(mass[:n].sum() * g)
         forces = {
@@ -245,14 +298,14 @@ def write_sample(path_or_file, frames: int, n_max: int, dt: float, profile: str,
         }
         for w in WALLS:
             fx, fy, fz = forces[w]
-            writer.write_message(f"/walls/{w}/force", Vector3(x=fx, y=fy, z=fz), log_time=ns, publish_time=ns)
+            writer.write(f"/walls/{w}/force", Vector3(x=fx, y=fy, z=fz), ns, unit="N")
             tx, ty, tz = torques[w]
-            writer.write_message(f"/walls/{w}/torque", Vector3(x=tx, y=ty, z=tz), log_time=ns, publish_time=ns)
+            writer.write(f"/walls/{w}/torque", Vector3(x=tx, y=ty, z=tz), ns, unit="N m")
 
         ke = float(0.5 * (mass[:n] * speed.astype(np.float64) ** 2).sum())
         scalars = {"kinetic_energy": ke, "contacts": float(int(2.5 * n)), "particles": float(n)}
         for name, value in scalars.items():
-            writer.write_message(f"/scalars/{name}", Vector3(x=value, y=0.0, z=0.0), log_time=ns, publish_time=ns)
+            writer.write(f"/scalars/{name}", Vector3(x=value, y=0.0, z=0.0), ns, unit=SCALARS[name][0])
 
     writer.finish()
 
@@ -266,6 +319,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--profile", default="", choices=["", "protobuf"], help='MCAP header profile (default "")')
     ap.add_argument("--chunk-size", type=int, default=64 * 1024, help="target uncompressed chunk size in bytes")
+    ap.add_argument("--spheres", action="store_true", help="also write /spheres (SceneUpdate, a sphere per particle)")
     ap.add_argument(
         "--truncate",
         type=float,
@@ -275,7 +329,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     buf = io.BytesIO()
-    write_sample(buf, args.frames, args.particles, args.dt, args.profile, args.chunk_size, args.seed)
+    write_sample(buf, args.frames, args.particles, args.dt, args.profile, args.chunk_size, args.seed, args.spheres)
     data = buf.getvalue()
     if args.truncate is not None:
         if not 0.0 < args.truncate < 1.0:

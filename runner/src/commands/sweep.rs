@@ -1,15 +1,26 @@
 //! `tilth sweep plan|run|status|slurm`.
 
-use crate::sweep::Plan;
-use anyhow::Result;
+use crate::sweep::execute::{self, Options};
+use crate::sweep::job::Status;
+use crate::sweep::manifest::Manifest;
+use crate::sweep::{Plan, slurm};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Subcommand};
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 #[derive(Debug, Subcommand)]
 pub enum SweepCommand {
     /// Print the runs a sweep file expands into (coded and real values), running nothing.
     Plan(PlanArgs),
+    /// Run a sweep: runs pinned to cores, one MCAP file each; re-running resumes it.
+    Run(RunArgs),
+    /// Merge the manifests of a sweep directory (all shards) into one status table.
+    Status(StatusArgs),
+    /// Write an sbatch script that runs the sweep as a Slurm job array.
+    Slurm(SlurmArgs),
 }
 
 #[derive(Debug, Args)]
@@ -21,17 +32,271 @@ pub struct PlanArgs {
     pub json: bool,
 }
 
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Sweep file (TOML); the embedded demo (sweeps/demo.toml) when omitted.
+    pub file: Option<PathBuf>,
+    /// Output directory (default `runs/<sweep name>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Cores to use (default: every core this process may use).
+    #[arg(long)]
+    pub cores: Option<usize>,
+    /// Run only every N-th run, starting at I (0-based): `--shard 1/4`. Inside a Slurm array
+    /// task it defaults to the task's index and the array's size.
+    #[arg(long, value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Run failed runs again (by default a failed run, being deterministic, is kept).
+    #[arg(long)]
+    pub retry_failed: bool,
+    /// No progress bars.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct StatusArgs {
+    /// A sweep's output directory.
+    pub dir: PathBuf,
+    /// Print the merged manifest as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct SlurmArgs {
+    /// Sweep file (TOML).
+    pub file: PathBuf,
+    /// Output directory the array tasks write to (default `runs/<sweep name>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Array tasks (default: one per run, at most 100).
+    #[arg(long)]
+    pub tasks: Option<usize>,
+    /// Slurm partition (default: the cluster's default).
+    #[arg(long)]
+    pub partition: Option<String>,
+    /// Time limit per task, Slurm syntax (e.g. 2:00:00).
+    #[arg(long, default_value = "12:00:00")]
+    pub time: String,
+    /// Write the script here instead of printing it.
+    #[arg(long)]
+    pub write: Option<PathBuf>,
+}
+
+/// `I/N` with I < N.
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("`{s}`: write I/N, e.g. 0/4"))?;
+    let i: usize = i
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: I must be a number"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: N must be a number"))?;
+    if n == 0 || i >= n {
+        return Err(format!("`{s}`: allowed 0 <= I < N"));
+    }
+    Ok((i, n))
+}
+
+/// The shard of a Slurm array task, from its environment.
+pub fn slurm_shard() -> Result<Option<(usize, usize)>> {
+    let var = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<usize>().ok());
+    match (var("SLURM_ARRAY_TASK_ID"), var("SLURM_ARRAY_TASK_COUNT")) {
+        (Some(id), Some(count)) => {
+            let min = var("SLURM_ARRAY_TASK_MIN").unwrap_or(0);
+            let i = id.checked_sub(min).filter(|&i| i < count).ok_or_else(|| {
+                anyhow!("SLURM_ARRAY_TASK_ID = {id} does not fit an array of {count} tasks from {min}; submit a contiguous array (--array=0-{})", count - 1)
+            })?;
+            Ok(Some((i, count)))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// A sweep that ended with failed or interrupted runs (exit codes 1 and 130).
+#[derive(Debug)]
+pub enum SweepEnd {
+    Failed(usize),
+    Interrupted,
+}
+
+impl std::fmt::Display for SweepEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SweepEnd::Failed(n) => write!(
+                f,
+                "{n} run(s) failed; their errors are in the manifest and in runs/NNN/summary.json"
+            ),
+            SweepEnd::Interrupted => write!(
+                f,
+                "interrupted: running runs stopped after closing their MCAP chunks; run the same command again to finish the sweep"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for SweepEnd {}
+
+fn default_out(plan: &Plan) -> PathBuf {
+    Path::new("runs").join(&plan.name)
+}
+
 pub fn sweep(cmd: &SweepCommand, out: &mut dyn Write) -> Result<()> {
     match cmd {
         SweepCommand::Plan(args) => {
             let plan = Plan::load(args.file.as_deref())?;
+            let mut text = Vec::new();
             if args.json {
-                serde_json::to_writer_pretty(&mut *out, &plan.to_json())?;
-                writeln!(out)?;
+                serde_json::to_writer_pretty(&mut text, &plan.to_json())?;
+                writeln!(text)?;
             } else {
-                plan.write_table(out)?;
+                plan.write_table(&mut text)?;
+            }
+            out.write_all(&text)?;
+            Ok(())
+        }
+        SweepCommand::Run(args) => run(args, out),
+        SweepCommand::Status(args) => status(args, out),
+        SweepCommand::Slurm(args) => {
+            let plan = Plan::load(Some(&args.file))?;
+            let dir = args.out.clone().unwrap_or_else(|| default_out(&plan));
+            let script = slurm::script(&plan, &args.file, &dir, args)?;
+            match &args.write {
+                Some(p) => {
+                    std::fs::write(p, &script)
+                        .with_context(|| format!("{}: cannot write", p.display()))?;
+                    writeln!(
+                        out,
+                        "wrote {}; submit it with: sbatch {}",
+                        p.display(),
+                        p.display()
+                    )?;
+                }
+                None => out.write_all(script.as_bytes())?,
             }
             Ok(())
         }
     }
+}
+
+fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
+    let plan = Plan::load(args.file.as_deref())?;
+    let shard = match args.shard {
+        Some(s) => Some(s),
+        None => slurm_shard()?,
+    };
+    let dir = args.out.clone().unwrap_or_else(|| default_out(&plan));
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        // A second signal while stopping exits at once.
+        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
+        signal_hook::flag::register(sig, stop.clone())?;
+    }
+    let opts = Options {
+        out: dir.clone(),
+        cores: args.cores,
+        shard,
+        retry_failed: args.retry_failed,
+        show_progress: !args.quiet,
+    };
+    let shard_text = shard
+        .map(|(i, n)| format!(", shard {i}/{n}"))
+        .unwrap_or_default();
+    eprintln!(
+        "{}: {} runs{shard_text} into {}",
+        plan.name,
+        plan.runs.len(),
+        dir.display()
+    );
+    let outcome = execute::execute(&plan, &opts, stop)?;
+    let table = execute::write_results(&plan, &dir)?;
+    execute::print_table(&table, out)?;
+    let done = outcome
+        .rows
+        .iter()
+        .filter(|r| r.status == Status::Done)
+        .count();
+    let failed = outcome
+        .rows
+        .iter()
+        .filter(|r| r.status == Status::Failed)
+        .count();
+    writeln!(
+        out,
+        "\n{done} of {} runs done ({} run now, {failed} failed); results: {}, manifest: {}",
+        outcome.rows.len(),
+        outcome.ran,
+        dir.join("results.csv").display(),
+        crate::sweep::manifest::path(&dir, shard).display()
+    )?;
+    if outcome.interrupted {
+        return Err(SweepEnd::Interrupted.into());
+    }
+    if failed > 0 {
+        return Err(SweepEnd::Failed(failed).into());
+    }
+    Ok(())
+}
+
+fn status(args: &StatusArgs, out: &mut dyn Write) -> Result<()> {
+    let dir = &args.dir;
+    let mut manifests = vec![];
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot read", dir.display()))?;
+    for e in entries {
+        let p = e?.path();
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if name.starts_with("manifest") && name.ends_with(".json") {
+            let text = std::fs::read_to_string(&p)?;
+            let m: Manifest = serde_json::from_str(&text)
+                .with_context(|| format!("{}: not a tilth manifest", p.display()))?;
+            manifests.push(m);
+        }
+    }
+    if manifests.is_empty() {
+        bail!(
+            "{}: no manifest*.json; is it a sweep's output directory?",
+            dir.display()
+        );
+    }
+    let merged = crate::sweep::manifest::merge(dir, manifests)?;
+    if args.json {
+        serde_json::to_writer_pretty(&mut *out, &merged)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    let count = |s: Status| merged.rows.iter().filter(|r| r.status == s).count();
+    writeln!(
+        out,
+        "{}: {} runs: {} done, {} failed, {} interrupted, {} running, {} pending",
+        merged.sweep,
+        merged.rows.len(),
+        count(Status::Done),
+        count(Status::Failed),
+        count(Status::Interrupted),
+        count(Status::Running),
+        count(Status::Pending)
+    )?;
+    for r in &merged.rows {
+        writeln!(
+            out,
+            "{:>4}  {:<11}  {:>8}  {}  {}",
+            r.id,
+            r.status.as_str(),
+            r.wall_seconds
+                .map(|w| format!("{w:.1} s"))
+                .unwrap_or_default(),
+            r.mcap.as_deref().unwrap_or("-"),
+            r.error.as_deref().unwrap_or("")
+        )?;
+    }
+    Ok(())
 }

@@ -44,7 +44,7 @@ pub struct RunLayout {
 }
 
 /// What the writer did, for the run summary and the logging-cost benchmark.
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, serde::Deserialize)]
 pub struct RecorderStats {
     pub messages: u64,
     pub particle_frames: u64,

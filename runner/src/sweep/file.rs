@@ -216,14 +216,18 @@ impl FactorSection {
     /// Real value of a coded value: low/high map to -1/+1 linearly; with explicit levels,
     /// coded values of an evenly spaced grid on [-1, 1] pick the levels.
     pub fn real(&self, coded: f64) -> f64 {
-        match (&self.levels, self.low, self.high) {
+        let v = match (&self.levels, self.low, self.high) {
             (Some(levels), _, _) => {
                 let k = ((coded + 1.0) / 2.0 * (levels.len() - 1) as f64).round() as usize;
-                levels[k.min(levels.len() - 1)]
+                return levels[k.min(levels.len() - 1)];
             }
-            (None, Some(lo), Some(hi)) => 0.5 * (lo + hi) + 0.5 * (hi - lo) * coded,
-            _ => f64::NAN,
-        }
+            (None, Some(lo), _) if coded == -1.0 => return lo,
+            (None, _, Some(hi)) if coded == 1.0 => return hi,
+            (None, Some(lo), Some(hi)) => lo + (hi - lo) * (coded + 1.0) / 2.0,
+            _ => return f64::NAN,
+        };
+        // 12 significant digits: 0.25, not 0.25000000000000006, in tables and scenes.
+        format!("{v:.11e}").parse().unwrap_or(v)
     }
 
     /// Number of explicit levels (for a full factorial), or `None` for a low/high factor.

@@ -3,8 +3,13 @@
 //! Slurm job arrays ([`slurm`]).
 
 pub mod design;
+pub mod execute;
 pub mod file;
+pub mod job;
+pub mod manifest;
+pub mod observe;
 pub mod plan;
+pub mod slurm;
 pub mod target;
 
 pub use plan::{Plan, PlannedRun};

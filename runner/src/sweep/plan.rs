@@ -31,7 +31,7 @@ pub struct Factor {
 }
 
 /// One run of the sweep.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct PlannedRun {
     /// Run number, 1-based, in run order.
     pub id: usize,

@@ -1,0 +1,317 @@
+//! One run of a sweep: its scene, its pinned cores, its MCAP file and its summary.
+//!
+//! Files in the run's directory: `run.mcap.partial` while it runs, renamed to `run.mcap` when
+//! it completes, then `summary.json` (written last, atomically: its presence with status
+//! `done` is what marks the run complete for a resumed sweep).
+
+use super::observe::{self, Heap};
+use super::plan::{Plan, PlannedRun, innermost};
+use crate::commands::report::RunReport;
+use crate::config;
+use crate::record::writer::RunLayout;
+use crate::record::{Recorder, RecorderStats, snapshot};
+use anyhow::{Context, Result};
+use core_affinity::CoreId;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Steps between looks at the stop flag.
+const STOP_CHECK: u64 = 1000;
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    Pending,
+    Running,
+    Done,
+    Failed,
+    Interrupted,
+}
+
+impl Status {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Pending => "pending",
+            Status::Running => "running",
+            Status::Done => "done",
+            Status::Failed => "failed",
+            Status::Interrupted => "interrupted",
+        }
+    }
+}
+
+/// `summary.json` of a run.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct RunSummary {
+    pub sweep: String,
+    /// The plan's fingerprint: a summary of another sweep is not taken for this one's.
+    pub fingerprint: String,
+    pub run: PlannedRun,
+    pub status: Status,
+    pub error: Option<String>,
+    /// The MCAP file, relative to the run directory.
+    pub mcap: Option<String>,
+    pub wall_seconds: f64,
+    /// The heap on the tray at the end (scenes with a `tray` disc).
+    pub heap: Option<serde_json::Value>,
+    /// The kernel's end-of-run report.
+    pub report: Option<serde_json::Value>,
+    pub recorder: Option<RecorderStats>,
+    /// Cores the run was pinned to.
+    pub cores: Vec<usize>,
+}
+
+/// Shared with the sweep's progress display.
+#[derive(Debug, Default)]
+pub struct Live {
+    pub step: AtomicU64,
+    pub steps: AtomicU64,
+}
+
+/// `DIR/runs/NNN`.
+pub fn run_dir(out: &Path, id: usize) -> PathBuf {
+    out.join("runs").join(format!("{id:03}"))
+}
+
+/// Reads a run's summary, if it has one.
+pub fn read_summary(dir: &Path) -> Option<RunSummary> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// Writes `path` atomically (a temporary file renamed over it).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).with_context(|| format!("{}: cannot write", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// Runs `run` on `cores`, stopping early (interrupted) when `stop` is set.
+pub fn run_job(
+    plan: &Plan,
+    run: &PlannedRun,
+    out: &Path,
+    cores: &[CoreId],
+    pin: bool,
+    stop: &AtomicBool,
+    live: &Live,
+) -> RunSummary {
+    let dir = run_dir(out, run.id);
+    let start = Instant::now();
+    let mut summary = RunSummary {
+        sweep: plan.name.clone(),
+        fingerprint: plan.fingerprint.clone(),
+        run: run.clone(),
+        status: Status::Failed,
+        error: None,
+        mcap: None,
+        wall_seconds: 0.0,
+        heap: None,
+        report: None,
+        recorder: None,
+        cores: cores.iter().map(|c| c.id).collect(),
+    };
+    match simulate(plan, run, &dir, cores, pin, stop, live, &mut summary) {
+        Ok(status) => summary.status = status,
+        Err(e) => {
+            summary.status = Status::Failed;
+            summary.error = Some(innermost(&e));
+        }
+    }
+    summary.wall_seconds = start.elapsed().as_secs_f64();
+    if summary.status != Status::Interrupted {
+        // An interrupted run leaves no summary, so a resumed sweep runs it again.
+        let text = serde_json::to_vec_pretty(&summary).unwrap_or_default();
+        if let Err(e) = write_atomic(&dir.join("summary.json"), &text) {
+            summary.status = Status::Failed;
+            summary.error = Some(format!("{e:#}"));
+        }
+    }
+    summary
+}
+
+fn simulate(
+    plan: &Plan,
+    run: &PlannedRun,
+    dir: &Path,
+    cores: &[CoreId],
+    pin: bool,
+    stop: &AtomicBool,
+    live: &Live,
+    summary: &mut RunSummary,
+) -> Result<Status> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    for stale in ["summary.json", "run.mcap", "run.mcap.partial"] {
+        let _ = std::fs::remove_file(dir.join(stale));
+    }
+    let origin = format!("{} (run {})", plan.scene.origin, run.id);
+    let prepared = config::prepare_value(
+        plan.scene_for(run)?,
+        &origin,
+        &plan.scene.dir,
+        Some(plan.threads),
+    )?;
+    let rates = plan.record.resolve(prepared.setup.dt)?;
+    let wall_names: Vec<String> = prepared.info.walls.iter().map(|(n, _)| n.clone()).collect();
+    let tray = observe::find_tray(&wall_names, &prepared.wall_shapes);
+    let layout = RunLayout {
+        wall_names,
+        wall_shapes: prepared.wall_shapes.clone(),
+        metadata: metadata(plan, run),
+        units: units(),
+        spheres: plan.record.spheres,
+        flush_frames: plan.record.flush_frames,
+    };
+    let pinned: Vec<CoreId> = if pin { cores.to_vec() } else { vec![] };
+    let workers = pinned.clone();
+    let loaded = prepared.start(Some(Arc::new(move |k: usize| {
+        if !workers.is_empty() {
+            core_affinity::set_for_current(workers[k % workers.len()]);
+        }
+    })))?;
+    let info = loaded.info.clone();
+    let threads = loaded.threads;
+    let steps = loaded.steps;
+    let mut sim = loaded.sim;
+    live.steps.store(steps, Ordering::Relaxed);
+    // The writer shares the run's first core: its time counts against the run's budget.
+    let writer_core = pinned.first().copied();
+    let mut recorder = Recorder::start(&dir.join("run.mcap"), layout, move || {
+        if let Some(c) = writer_core {
+            core_affinity::set_for_current(c);
+        }
+    })?;
+    let extra = |sim: &tilth_kernel::sim::Simulation| -> Vec<(String, f64)> {
+        tray.map(|t| {
+            let h = observe::heap(sim, t);
+            vec![
+                ("heap_cone_angle_deg".to_string(), h.cone_angle_deg),
+                ("heap_height".to_string(), h.height_m),
+            ]
+        })
+        .unwrap_or_default()
+    };
+    let record = |sim: &tilth_kernel::sim::Simulation, rec: &mut Recorder| -> Result<()> {
+        let step = sim.step;
+        if crate::record::FrameRates::due(rates.particles, step) {
+            rec.send(snapshot::particles(sim))?;
+        }
+        if crate::record::FrameRates::due(rates.walls, step) {
+            rec.send(snapshot::walls(sim))?;
+        }
+        if crate::record::FrameRates::due(rates.scalars, step) {
+            rec.send(snapshot::scalars(sim, &extra(sim)))?;
+        }
+        Ok(())
+    };
+    let t0 = Instant::now();
+    let mut particle_steps: u64 = 0;
+    let mut interrupted = false;
+    let mut failure = None;
+    record(&sim, &mut recorder)?;
+    while sim.step < steps {
+        if stop.load(Ordering::Relaxed) {
+            interrupted = true;
+            break;
+        }
+        let n = rates
+            .steps_to_next(sim.step, steps - sim.step)
+            .min(STOP_CHECK - sim.step % STOP_CHECK);
+        let before = sim.particles.len() as u64;
+        if let Err(e) = sim.run(n) {
+            failure = Some(anyhow::Error::from(e).context(origin.clone()));
+            break;
+        }
+        particle_steps += n * before.max(sim.particles.len() as u64);
+        live.step.store(sim.step, Ordering::Relaxed);
+        record(&sim, &mut recorder)?;
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    let complete = !interrupted && failure.is_none();
+    summary.recorder = Some(recorder.finish(complete)?);
+    if let Some(t) = tray {
+        let h: Heap = observe::heap(&sim, t);
+        summary.heap = serde_json::to_value(h).ok();
+    }
+    let report = RunReport::new(&sim, &info, threads, 0.0, wall, particle_steps, vec![]);
+    summary.report = serde_json::to_value(&report).ok();
+    if let Some(e) = failure {
+        summary.mcap = Some("run.mcap.partial".into());
+        return Err(e);
+    }
+    if interrupted {
+        summary.mcap = Some("run.mcap.partial".into());
+        return Ok(Status::Interrupted);
+    }
+    summary.mcap = Some("run.mcap".into());
+    Ok(Status::Done)
+}
+
+/// MCAP metadata records: what the run is and what made it.
+fn metadata(plan: &Plan, run: &PlannedRun) -> BTreeMap<String, BTreeMap<String, String>> {
+    let mut r = BTreeMap::new();
+    r.insert("sweep".into(), plan.origin.clone());
+    r.insert("sweep_name".into(), plan.name.clone());
+    r.insert("design".into(), plan.title.clone());
+    r.insert("scene".into(), plan.scene.origin.clone());
+    r.insert("run_id".into(), run.id.to_string());
+    r.insert("std_order".into(), run.std.to_string());
+    r.insert("replicate".into(), run.replicate.to_string());
+    r.insert("seed".into(), run.seed.to_string());
+    r.insert("fingerprint".into(), plan.fingerprint.clone());
+    r.insert("tilth_version".into(), env!("CARGO_PKG_VERSION").into());
+    r.insert("git_commit".into(), crate::GIT_COMMIT.into());
+    for (k, v) in &run.values {
+        r.insert(format!("factor.{k}"), v.to_string());
+    }
+    for (k, v) in &run.coded {
+        r.insert(format!("coded.{k}"), v.to_string());
+    }
+    let mut channels = BTreeMap::new();
+    channels.insert(
+        "/particles".into(),
+        "foxglove.PointCloud in frame world: x, y, z, radius (m), speed (m/s), id, material".into(),
+    );
+    channels.insert(
+        "/walls".into(),
+        "foxglove.SceneUpdate: one entity per wall, moved by its motion".into(),
+    );
+    channels.insert(
+        "/walls/<name>/force".into(),
+        "foxglove.Vector3: force of the particles on the wall, N".into(),
+    );
+    channels.insert(
+        "/walls/<name>/torque".into(),
+        "foxglove.Vector3: torque about the wall's reference point, N m".into(),
+    );
+    channels.insert(
+        "/scalars/<name>".into(),
+        "foxglove.Vector3 with the value in x (Foxglove's schemas have no scalar type)".into(),
+    );
+    for (k, u) in units() {
+        channels.insert(format!("/scalars/{k}"), u);
+    }
+    let mut m = BTreeMap::new();
+    m.insert("tilth.run".to_string(), r);
+    m.insert("tilth.channels".to_string(), channels);
+    m
+}
+
+/// Units of the scalar channels.
+fn units() -> BTreeMap<String, String> {
+    [
+        ("kinetic_energy", "J"),
+        ("particles", "count"),
+        ("contacts", "count"),
+        ("heap_cone_angle_deg", "degree"),
+        ("heap_height", "m"),
+    ]
+    .into_iter()
+    .map(|(a, b)| (a.to_string(), b.to_string()))
+    .collect()
+}
