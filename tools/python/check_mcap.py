@@ -568,7 +568,8 @@ def check_complete(path: str, report: Report) -> None:
             raise CheckFailure(f"incomplete or corrupt summary section: {e}") from None
         if summary is None:
             raise CheckFailure("no summary section (the footer says summary_start = 0)")
-        for schema, channel, message in reader.iter_messages(log_time_order=True):
+        # File order (not log-time order), so that the per-topic time-order check tests the writer.
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
             checker.on_message(schema, channel, message)
         _add_metadata(report, reader.iter_metadata())
         stats = summary.statistics

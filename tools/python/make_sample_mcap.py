@@ -78,7 +78,7 @@ PARTICLE_DTYPE = np.dtype(
 DRUM_RADIUS = 0.10  # m
 DRUM_LENGTH = 0.05  # m, along y
 DRUM_OMEGA = 2.0  # rad/s about +y
-WALLS = ("drum", "floor", "chute")
+WALLS = ("drum", "floor", "chute", "hopper")
 SCALARS = {
     "kinetic_energy": ("J", "total translational kinetic energy of the particles"),
     "contacts": ("1", "number of active particle-particle and particle-wall contacts"),
@@ -186,7 +186,23 @@ def walls_update(t: float) -> SceneUpdate:
             )
         ],
     )
-    return SceneUpdate(entities=[drum, floor, chute])
+    # A conical hopper above the chute, written as tilth writes an axisymmetric wall:
+    # size = bounding box of the larger radius, bottom/top_scale = radius / larger radius.
+    r_base, r_top, length = 0.01, 0.04, 0.06
+    hopper = SceneEntity(
+        frame_id="world",
+        id="hopper",
+        cylinders=[
+            CylinderPrimitive(
+                pose=identity_pose(x=-0.14, z=0.20 + length / 2),
+                size=Vector3(x=2 * r_top, y=2 * r_top, z=length),
+                bottom_scale=r_base / r_top,
+                top_scale=1.0,
+                color=Color(r=0.6, g=0.6, b=0.65, a=0.35),
+            )
+        ],
+    )
+    return SceneUpdate(entities=[drum, floor, chute, hopper])
 
 
 def particle_state(rng: np.random.Generator, n_max: int, frames: int):
@@ -227,6 +243,8 @@ def write_sample(
         "/particles": "m, m/s; foxglove.PointCloud in frame world: x y z radius [m], speed [m/s], id, material",
         "/walls": "m; foxglove.SceneUpdate, one entity per wall (entity id = wall name)",
     }
+    if spheres:
+        channels["/spheres"] = "m, m/s; foxglove.SceneUpdate, every particle as a sphere of its diameter, coloured by speed"
     for w in WALLS:
         channels[f"/walls/{w}/force"] = f"N; total contact force on wall {w} (foxglove.Vector3)"
         channels[f"/walls/{w}/torque"] = f"N m; total contact torque on wall {w} about the origin (foxglove.Vector3)"
@@ -290,11 +308,13 @@ def write_sample(
             "drum": (0.0, 0.0, weight * (0.95 + 0.05 * math.sin(5 * t))),
             "floor": (0.0, 0.0, 0.0),
             "chute": (0.01 * math.sin(t), 0.0, 0.02 * (1 + math.cos(t))),
+            "hopper": (0.0, 0.0, 0.005 * max(0.0, 1.0 - t)),
         }
         torques = {
             "drum": (0.0, -weight * 0.3 * DRUM_RADIUS, 0.0),
             "floor": (0.0, 0.0, 0.0),
             "chute": (0.0, 0.001 * math.sin(t), 0.0),
+            "hopper": (0.0, 0.0, 0.0),
         }
         for w in WALLS:
             fx, fy, fz = forces[w]

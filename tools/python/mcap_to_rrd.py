@@ -14,7 +14,8 @@ time):
                           default the run's maximum), class_ids = material; plus
                           the components particle_id and speed (AnyValues)
   /walls/<name>           Boxes3D / Cylinders3D / Mesh3D from the /walls SceneUpdate
-                          (re-logged only when the wall changes)
+                          (cones and elliptic cylinders as Mesh3D; re-logged only
+                          when the wall's shape or pose changes)
   /walls/<name>/force     Scalars time series, three series x y z  (N)
   /walls/<name>/torque    Scalars time series, three series x y z  (N m)
   /scalars/<name>         Scalars time series, one series (the x of the Vector3)
@@ -108,6 +109,40 @@ def rgba(c, default=(180, 180, 180, 255)):
     return tuple(int(round(255 * max(0.0, min(1.0, v)))) for v in (c.r, c.g, c.b, c.a))
 
 
+def _is_cone(c) -> bool:
+    """True unless the Foxglove cylinder is a plain circular cylinder (which Cylinders3D draws)."""
+    bottom = c.bottom_scale or 1.0  # 0 would be a cone tip; proto3 cannot tell it from unset
+    top = c.top_scale or 1.0
+    return abs(bottom - top) > 1e-9 or abs(c.size.x - c.size.y) > 1e-12 * max(1.0, abs(c.size.x))
+
+
+def cone_mesh(c, segments: int = 64):
+    """A truncated (possibly elliptic) cone as a closed triangle mesh: foxglove.CylinderPrimitive's
+    bounding box `size`, bottom face (min z) scaled by bottom_scale, top face by top_scale.
+    Returns (vertices, triangles, per-vertex RGBA)."""
+    pos, q = pose_tuple(c.pose)
+    a = 2 * np.pi * np.arange(segments) / segments
+    rx, ry, h = c.size.x / 2, c.size.y / 2, c.size.z / 2
+    ring = np.stack([rx * np.cos(a), ry * np.sin(a)], axis=1)
+    bottom = np.column_stack([ring * c.bottom_scale, np.full(segments, -h)])
+    top = np.column_stack([ring * c.top_scale, np.full(segments, h)])
+    verts = np.vstack([bottom, top, [[0, 0, -h], [0, 0, h]]])
+    i = np.arange(segments)
+    j = (i + 1) % segments
+    nb, nt = 2 * segments, 2 * segments + 1
+    tris = np.vstack(
+        [
+            np.column_stack([i, j, segments + j]),  # side
+            np.column_stack([i, segments + j, segments + i]),
+            np.column_stack([np.full(segments, nb), j, i]),  # bottom cap
+            np.column_stack([np.full(segments, nt), segments + i, segments + j]),  # top cap
+        ]
+    ).astype(np.uint32)
+    verts = quat_rotate(q, verts) + np.array(pos)
+    colour = rgba(c.color if c.HasField("color") else None)
+    return verts, tris, np.tile(np.array(colour, dtype=np.uint8), (len(verts), 1))
+
+
 def wall_archetypes(entity, rr):
     """Rerun archetypes for one foxglove.SceneEntity (cubes, cylinders, triangle lists)."""
     out = []
@@ -120,15 +155,15 @@ def wall_archetypes(entity, rr):
             quats.append(q)
             colors.append(rgba(c.color if c.HasField("color") else None))
         out.append(rr.Boxes3D(centers=centers, half_sizes=halves, quaternions=quats, colors=colors))
-    if entity.cylinders:
+    meshes = [cone_mesh(c) for c in entity.cylinders if _is_cone(c)]
+    plain = [c for c in entity.cylinders if not _is_cone(c)]
+    if plain:
         centers, lengths, radii, quats, colors = [], [], [], [], []
-        for c in entity.cylinders:
+        for c in plain:
             pos, q = pose_tuple(c.pose)
             centers.append(pos)
             lengths.append(c.size.z)
-            # Rerun cylinders are circular with equal caps: take the larger cap and axis.
-            scale = max(c.bottom_scale, c.top_scale) or 1.0
-            radii.append(max(c.size.x, c.size.y) / 2 * scale)
+            radii.append(c.size.x / 2 * (c.bottom_scale or 1.0))
             quats.append(q)
             colors.append(rgba(c.color if c.HasField("color") else None))
         out.append(
@@ -140,12 +175,26 @@ def wall_archetypes(entity, rr):
         pts = quat_rotate(q, pts) + np.array(pos)
         idx = np.array(tri.indices, dtype=np.uint32) if len(tri.indices) else np.arange(len(pts), dtype=np.uint32)
         idx = idx[: len(idx) // 3 * 3].reshape(-1, 3)
-        kwargs = {}
         if tri.colors:
-            kwargs["vertex_colors"] = [rgba(c) for c in tri.colors]
+            cols = np.array([rgba(c) for c in tri.colors], dtype=np.uint8)
         else:
-            kwargs["albedo_factor"] = rgba(tri.color if tri.HasField("color") else None)
-        out.append(rr.Mesh3D(vertex_positions=pts.astype(np.float32), triangle_indices=idx, **kwargs))
+            cols = np.tile(np.array(rgba(tri.color if tri.HasField("color") else None), np.uint8), (len(pts), 1))
+        meshes.append((pts, idx, cols))
+    if meshes:
+        # One Mesh3D per entity (a second one on the same entity path would replace the first).
+        verts, tris, cols, base = [], [], [], 0
+        for v, t, c in meshes:
+            verts.append(v)
+            tris.append(t + base)
+            cols.append(c)
+            base += len(v)
+        out.append(
+            rr.Mesh3D(
+                vertex_positions=np.vstack(verts).astype(np.float32),
+                triangle_indices=np.vstack(tris).astype(np.uint32),
+                vertex_colors=np.vstack(cols),
+            )
+        )
     return out
 
 
@@ -267,7 +316,10 @@ def convert(inp: str, out: str, allow_partial: bool, speed_max: float | None, ap
                     rec.log(f"/walls/{i}", rr.Clear(recursive=False))
                     last_wall.pop(i, None)
             for e in msg.entities:
-                key = e.SerializeToString(deterministic=True)
+                shape = type(e)()
+                shape.CopyFrom(e)
+                shape.ClearField("timestamp")  # re-log a wall only when its shape or pose changes
+                key = shape.SerializeToString(deterministic=True)
                 if last_wall.get(e.id) == key:
                     continue
                 last_wall[e.id] = key
@@ -279,7 +331,7 @@ def convert(inp: str, out: str, allow_partial: bool, speed_max: float | None, ap
             times.append(ns)
             values.append((v.x, v.y, v.z) if WALL_VECTOR_RE.match(topic) else (v.x,))
         else:
-            stats["skipped"][topic] += 1
+            stats["skipped"][topic] += 1  # e.g. /spheres: the same particles as /particles
 
     for entity, (times, values) in series.items():
         vals = np.asarray(values, dtype=np.float64)
@@ -309,7 +361,8 @@ def convert(inp: str, out: str, allow_partial: bool, speed_max: float | None, ap
             f"{len(series)} time series ({stats['series_points']} points), colours 0..{speed_max:.4g} m/s"
         )
         for t, n in stats["skipped"].items():
-            print(f"  skipped {n} messages on {t} (not part of tilth's layout)")
+            why = "same particles as /particles" if t == "/spheres" else "not a topic this converter knows"
+            print(f"  skipped {n} messages on {t} ({why})")
         for n in notes:
             print(f"  {n}")
     return stats

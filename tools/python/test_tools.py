@@ -25,6 +25,8 @@ from mcap.reader import make_reader  # noqa: E402
 from mcap.writer import CompressionType, Writer  # noqa: E402
 
 PY = sys.executable
+# messages per frame in the sample: /particles, /walls, 4 walls x (force, torque), 3 scalars
+PER_FRAME = 1 + 1 + 4 * 2 + 3
 
 
 def run(*args, check=None):
@@ -97,12 +99,14 @@ class CheckMcapTest(Base):
         proc = run("check_mcap.py", self.sample, "--json", check=0)
         rep = json.loads(proc.stdout)["files"][0]
         self.assertTrue(rep["complete"])
-        self.assertEqual(rep["messages_read"], 60 * 11)
+        self.assertEqual(rep["messages_read"], 60 * PER_FRAME)
         self.assertEqual(rep["messages_decoded"], rep["messages_read"])
         self.assertEqual(rep["topics"]["/particles"]["messages"], 60)
         self.assertEqual(rep["first_cloud"]["particles"], 7)
         self.assertEqual(rep["last_cloud"]["particles"], 200)
-        self.assertEqual(rep["walls"], ["drum", "floor", "chute"])
+        self.assertEqual(rep["walls"], ["drum", "floor", "chute", "hopper"])
+        self.assertEqual(rep["topics"]["/walls/drum/force"]["unit"], "N")
+        self.assertEqual(rep["topics"]["/scalars/kinetic_energy"]["unit"], "J")
         self.assertEqual(rep["metadata"]["tilth.run"]["seed"], "7")
         self.assertIn("/scalars/kinetic_energy", rep["metadata"]["tilth.channels"])
         self.assertEqual(rep["warnings"], [])
@@ -123,7 +127,7 @@ class CheckMcapTest(Base):
         rep = json.loads(proc.stdout)["files"][0]
         self.assertFalse(rep["complete"])
         self.assertGreater(rep["messages_read"], 0)
-        self.assertLess(rep["messages_read"], 60 * 11)
+        self.assertLess(rep["messages_read"], 60 * PER_FRAME)
         self.assertEqual(rep["messages_read"], rep["messages_decoded"])
         self.assertIsNotNone(rep["truncation"])
 
@@ -249,12 +253,82 @@ class CheckMcapTest(Base):
         rewrite(self.sample, dst, metadata_fn=lambda name, kv: None if name == "tilth.run" else kv)
         self.check_fails(dst, '"tilth.run" is missing')
 
+    def test_closed_partial_needs_allow_partial(self):
+        # a run stopped early whose file was closed: complete MCAP structure, .partial name
+        dst = self.path("closed.mcap.partial")
+        shutil.copy(self.sample, dst)
+        self.check_fails(dst, "incomplete run")
+        proc = run("check_mcap.py", dst, "--allow-partial", "--json", check=0)
+        rep = json.loads(proc.stdout)["files"][0]
+        self.assertTrue(rep["complete"])
+        self.assertEqual(rep["messages_read"], 60 * PER_FRAME)
+
+    def test_spheres_topic_accepted(self):
+        dst = self.path("spheres.mcap")
+        run("make_sample_mcap.py", dst, "--frames", "10", "--particles", "30", "--spheres", check=0)
+        proc = run("check_mcap.py", dst, "--json", "--strict", check=0)
+        rep = json.loads(proc.stdout)["files"][0]
+        self.assertEqual(rep["topics"]["/spheres"]["schema"], "foxglove.SceneUpdate")
+
+    def test_schema_mismatch_fails(self):
+        # the stored FileDescriptorSet must agree with foxglove_schemas_protobuf's
+        from google.protobuf import descriptor_pb2
+
+        dst = self.path("schema_mismatch.mcap")
+
+        def fn(topic, sname, sdata, data, lt, pt):
+            if sname == "foxglove.Vector3":
+                fds = descriptor_pb2.FileDescriptorSet.FromString(sdata)
+                for fd in fds.file:
+                    for m in fd.message_type:
+                        if m.name == "Vector3":
+                            m.field[0].name = "u"
+                sdata = fds.SerializeToString()
+            return sname, sdata, data, lt, pt
+
+        rewrite(self.sample, dst, fn)
+        self.check_fails(dst, "foxglove.Vector3 field #1 is u")
+
     def test_several_files_one_bad(self):
         dst = self.path("junk2.mcap")
         with open(dst, "wb") as f:
             f.write(b"\x89MCAP0\r\n" + b"\x00" * 10)
         proc = run("check_mcap.py", self.sample, dst, check=1)
         self.assertIn("1 passed, 1 failed", proc.stdout)
+
+
+class GeometryTest(unittest.TestCase):
+    def test_cone_mesh(self):
+        import numpy as np
+        from foxglove_schemas_protobuf.CylinderPrimitive_pb2 import CylinderPrimitive
+
+        import mcap_to_rrd as m
+
+        c = CylinderPrimitive(bottom_scale=0.25, top_scale=1.0)
+        c.size.x = c.size.y = 0.08
+        c.size.z = 0.06
+        c.pose.position.z = 1.0
+        c.pose.orientation.w = 1.0
+        self.assertTrue(m._is_cone(c))
+        verts, tris, cols = m.cone_mesh(c, segments=16)
+        r = np.hypot(verts[:, 0], verts[:, 1])
+        self.assertAlmostEqual(r[:16].max(), 0.01, places=6)  # bottom ring: 0.04 * 0.25
+        self.assertAlmostEqual(r[16:32].max(), 0.04, places=6)  # top ring
+        self.assertAlmostEqual(verts[:, 2].min(), 0.97, places=6)
+        self.assertAlmostEqual(verts[:, 2].max(), 1.03, places=6)
+        self.assertEqual(tris.max(), len(verts) - 1)
+        self.assertEqual(len(cols), len(verts))
+
+    def test_quat_rotate(self):
+        import math
+
+        import numpy as np
+
+        import mcap_to_rrd as m
+
+        q = (0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4))  # +90 deg about z
+        out = m.quat_rotate(q, np.array([[1.0, 0.0, 0.0]]))
+        np.testing.assert_allclose(out, [[0.0, 1.0, 0.0]], atol=1e-12)
 
 
 class RerunTest(Base):
@@ -267,6 +341,7 @@ class RerunTest(Base):
             "--json",
             "--entity", "/particles",
             "--entity", "/walls/drum",
+            "--component", "/walls/hopper=Mesh3D:vertex_positions",
             "--entity", "/walls/drum/force",
             "--entity", "/scalars/kinetic_energy",
             "--component", "/particles=Points3D:radii",
