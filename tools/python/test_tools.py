@@ -248,6 +248,20 @@ class CheckMcapTest(Base):
         rewrite(self.sample, dst, lambda t, s, d, data, lt, pt: (s, d, data, lt, pt + 1))
         self.check_fails(dst, "publish_time")
 
+    def test_time_going_backwards(self):
+        dst = self.path("backwards.mcap")
+        seen = {"n": 0}
+
+        def fn(topic, sname, sdata, data, lt, pt):
+            if topic == "/scalars/contacts":
+                seen["n"] += 1
+                if seen["n"] == 30:
+                    lt = pt = lt - 20_000_000
+            return sname, sdata, data, lt, pt
+
+        rewrite(self.sample, dst, fn)
+        self.check_fails(dst, "log_time goes backwards")
+
     def test_missing_metadata(self):
         dst = self.path("nometa.mcap")
         rewrite(self.sample, dst, metadata_fn=lambda name, kv: None if name == "tilth.run" else kv)

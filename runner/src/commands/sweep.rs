@@ -166,6 +166,10 @@ pub fn sweep(cmd: &SweepCommand, out: &mut dyn Write) -> Result<()> {
             let plan = Plan::load(Some(&args.file))?;
             let dir = args.out.clone().unwrap_or_else(|| default_out(&plan));
             let script = slurm::script(&plan, &args.file, &dir, args)?;
+            // sbatch needs the log directory to exist before the tasks start.
+            let logs = dir.join("slurm");
+            std::fs::create_dir_all(&logs)
+                .with_context(|| format!("{}: cannot create", logs.display()))?;
             match &args.write {
                 Some(p) => {
                     std::fs::write(p, &script)

@@ -2,6 +2,7 @@
 
 mod config_files;
 mod end_to_end;
+mod external;
 mod sweeps;
 
 use std::path::PathBuf;

@@ -1,0 +1,213 @@
+//! Tests that use real outside software: the official Python MCAP reader with Foxglove's
+//! protobuf schemas, Rerun's MCAP importer, and a Slurm cluster. `.ci/run` installs them
+//! and sets TILTH_REQUIRE_PYTHON=1 and TILTH_REQUIRE_SLURM=1, which turn a missing tool
+//! into a failure; elsewhere the tests say what is missing and return.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tilth() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tilth"))
+}
+
+fn repo(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(p)
+}
+
+/// The Python with tools/python/requirements.txt installed (TILTH_PYTHON, default python3),
+/// or `None` (after saying why) when it is not there and not required.
+fn python() -> Option<String> {
+    let py = std::env::var("TILTH_PYTHON").unwrap_or_else(|_| "python3".into());
+    let probe = Command::new(&py)
+        .args([
+            "-c",
+            "import mcap, mcap_protobuf, foxglove_schemas_protobuf, rerun",
+        ])
+        .output();
+    let ok = probe.as_ref().is_ok_and(|o| o.status.success());
+    if ok {
+        return Some(py);
+    }
+    let why = match probe {
+        Ok(o) => String::from_utf8_lossy(&o.stderr).into_owned(),
+        Err(e) => e.to_string(),
+    };
+    if std::env::var("TILTH_REQUIRE_PYTHON").is_ok_and(|v| v == "1") {
+        panic!("{py} lacks tools/python/requirements.txt: {why}");
+    }
+    eprintln!("SKIPPED: {py} lacks tools/python/requirements.txt ({why}); .ci/run installs it");
+    None
+}
+
+/// The `rerun` CLI beside the Python interpreter, or on PATH.
+fn rerun(py: &str) -> String {
+    let out = Command::new(py)
+        .args([
+            "-c",
+            "import sys, os; print(os.path.dirname(sys.executable))",
+        ])
+        .output()
+        .unwrap();
+    let dir = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    let beside = Path::new(&dir).join("rerun");
+    if beside.exists() {
+        beside.display().to_string()
+    } else {
+        "rerun".into()
+    }
+}
+
+fn script(name: &str) -> PathBuf {
+    repo("tools/python").join(name)
+}
+
+fn run_ok(c: &mut Command) -> String {
+    let out = c.output().unwrap_or_else(|e| panic!("{c:?}: {e}"));
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "{c:?} failed:\n{text}");
+    text
+}
+
+/// Runs one run of the tiny test sweep and returns its MCAP file.
+fn one_run(tag: &str) -> (PathBuf, PathBuf) {
+    let out = std::env::temp_dir().join(format!("tilth-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let sweep = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweeps/tiny.toml");
+    run_ok(
+        tilth()
+            .args(["sweep", "run", "--quiet", "--shard", "0/4", "--out"])
+            .arg(&out)
+            .arg(&sweep),
+    );
+    let mcap = out.join("runs/001/run.mcap");
+    assert!(mcap.exists());
+    (out, mcap)
+}
+
+#[test]
+fn mcap_reads_with_the_official_reader_and_decodes_with_foxglove_schemas() {
+    let Some(py) = python() else { return };
+    let (out, mcap) = one_run("py");
+    let report = run_ok(Command::new(&py).arg(script("check_mcap.py")).arg(&mcap));
+    assert!(report.contains("foxglove.PointCloud"), "{report}");
+    // A file cut in the middle is refused as incomplete, or read up to the cut on request.
+    let cut = out.join("cut.mcap");
+    let bytes = std::fs::read(&mcap).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() * 6 / 10]).unwrap();
+    let refused = Command::new(&py)
+        .arg(script("check_mcap.py"))
+        .arg(&cut)
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    let text = String::from_utf8_lossy(&refused.stdout).to_string()
+        + &String::from_utf8_lossy(&refused.stderr);
+    assert!(text.contains("incomplete"), "{text}");
+    run_ok(
+        Command::new(&py)
+            .arg(script("check_mcap.py"))
+            .arg("--allow-partial")
+            .arg(&cut),
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn rerun_converts_the_mcap_and_shows_the_particles() {
+    let Some(py) = python() else { return };
+    let (out, mcap) = one_run("rerun");
+    // Rerun's own MCAP importer.
+    let rrd = out.join("imported.rrd");
+    run_ok(
+        Command::new(rerun(&py))
+            .args(["mcap", "convert"])
+            .arg(&mcap)
+            .arg("-o")
+            .arg(&rrd),
+    );
+    let found = run_ok(
+        Command::new(&py)
+            .arg(script("check_rrd.py"))
+            .arg(&rrd)
+            .args(["--entity", "/particles"]),
+    );
+    assert!(found.contains("Points3D:positions"), "{found}");
+    // Our converter keeps what the importer drops: radii and scalar plots.
+    let rrd2 = out.join("converted.rrd");
+    run_ok(
+        Command::new(&py)
+            .arg(script("mcap_to_rrd.py"))
+            .arg(&mcap)
+            .arg(&rrd2),
+    );
+    run_ok(
+        Command::new(&py)
+            .arg(script("check_rrd.py"))
+            .arg(&rrd2)
+            .args([
+                "--entity",
+                "/particles",
+                "--component",
+                "/particles=Points3D:radii",
+            ])
+            .args(["--entity", "/scalars/kinetic_energy"]),
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Whether a Slurm cluster answers (or `None` after saying why).
+fn slurm() -> Option<()> {
+    let up = Command::new("sinfo")
+        .args(["-h", "-o", "%T"])
+        .output()
+        .is_ok_and(|o| o.status.success() && !o.stdout.is_empty());
+    if up {
+        return Some(());
+    }
+    if std::env::var("TILTH_REQUIRE_SLURM").is_ok_and(|v| v == "1") {
+        panic!("no Slurm cluster answers `sinfo`; run .ci/slurm-up.sh");
+    }
+    eprintln!("SKIPPED: no Slurm cluster (sinfo); .ci/run starts one with .ci/slurm-up.sh");
+    None
+}
+
+#[test]
+fn a_slurm_job_array_runs_the_sweep_and_status_merges_the_shards() {
+    let Some(()) = slurm() else { return };
+    let base = std::env::temp_dir().join(format!("tilth-slurm-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let out = base.join("out");
+    let job = base.join("job.sh");
+    let sweep = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/sweeps/tiny.toml");
+    run_ok(
+        tilth()
+            .args(["sweep", "slurm", "--tasks", "2", "--time", "10:00", "--out"])
+            .arg(&out)
+            .arg("--write")
+            .arg(&job)
+            .arg(&sweep),
+    );
+    run_ok(Command::new("sbatch").arg("--wait").arg(&job));
+    for shard in ["manifest.shard-0-of-2.json", "manifest.shard-1-of-2.json"] {
+        assert!(out.join(shard).exists(), "{shard} missing");
+    }
+    let status = run_ok(tilth().args(["sweep", "status", "--json"]).arg(&out));
+    let merged: serde_json::Value = serde_json::from_str(&status).unwrap();
+    let rows = merged["rows"].as_array().unwrap();
+    let ids: Vec<u64> = rows.iter().map(|r| r["id"].as_u64().unwrap()).collect();
+    assert_eq!(ids, [1, 2, 3, 4]);
+    assert!(rows.iter().all(|r| r["status"] == "done"), "{rows:?}");
+    for r in rows {
+        let mcap = out.join(r["mcap"].as_str().unwrap());
+        assert!(mcap.exists(), "{}", mcap.display());
+        if let Some(py) = python() {
+            run_ok(Command::new(&py).arg(script("check_mcap.py")).arg(&mcap));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&base);
+}
