@@ -526,7 +526,7 @@ class FileChecker:
         chans = r.metadata.get("tilth.channels")
         if chans is not None:
             # keys may be patterns such as "/walls/<name>/force"
-            patterns = [re.compile("^" + re.sub(r"<[^>/]+>", "[^/]+", re.escape(k).replace(r"\<", "<").replace(r"\>", ">")) + "$") for k in chans]
+            patterns = [re.compile("^" + re.sub(r"<[^>/]+>", "[^/]+", re.escape(k)) + "$") for k in chans]
             undocumented = [t for t in r.topics if t not in chans and not any(p.match(t) for p in patterns)]
             if undocumented:
                 r.warnings.append(f'"tilth.channels" does not describe {undocumented}')
@@ -607,6 +607,9 @@ def check_partial(path: str, report: Report) -> None:
             raise
         except Exception as e:  # noqa: BLE001 - any reader error here is the truncation point
             detail = str(e).strip() or "the file ends inside a record"
+            if "length 18446744073709551615" in detail:
+                # Rust's mcap crate writes a chunk's length (u64::MAX until then) when it closes it
+                detail = "the last chunk was still being written (its length was never filled in)"
             report.truncation = f"{type(e).__name__}: {detail}; file size {os.path.getsize(path)} bytes"
         else:
             report.truncation = None

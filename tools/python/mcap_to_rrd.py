@@ -21,7 +21,8 @@ time):
   /scalars/<name>         Scalars time series, one series (the x of the Vector3)
 
 The MCAP metadata records ("tilth.run", "tilth.channels", ...) become recording
-properties, and the recording is named after tilth.run's run_id. Any other topic
+properties, and the recording id and name are tilth.run's run_id (prefixed by
+sweep_name when present, e.g. "demo-3"). Any other topic
 is reported and skipped.
 """
 
@@ -256,7 +257,12 @@ def convert(inp: str, out: str, allow_partial: bool, speed_max: float | None, ap
         if speed_max <= 0:
             speed_max = 1.0
 
-    rec = rr.RecordingStream(app_id, recording_id=run.get("run_id") or None)
+    # Recording id: tilth.run's run_id, prefixed by the sweep's name when there is one
+    # (run ids restart at 1 in every sweep).
+    rec_id = run.get("run_id") or None
+    if rec_id and run.get("sweep_name"):
+        rec_id = f"{run['sweep_name']}-{rec_id}"
+    rec = rr.RecordingStream(app_id, recording_id=rec_id)
     # Only simulated time: no wall-clock "log_time" / "log_tick" timelines (keeps the output reproducible).
     rec.set_log_time_enabled(False)
     rec.set_log_tick_enabled(False)
@@ -273,8 +279,8 @@ def convert(inp: str, out: str, allow_partial: bool, speed_max: float | None, ap
         collapse_panels=False,
     )
     rec.save(out, default_blueprint=blueprint)
-    if run.get("run_id"):
-        rec.send_recording_name(run["run_id"])
+    if rec_id:
+        rec.send_recording_name(rec_id)
     for name, kv in metadata.items():
         if kv:
             rec.send_property(name, rr.AnyValues(**{k: str(v) for k, v in kv.items()}))
@@ -300,9 +306,11 @@ def convert(inp: str, out: str, allow_partial: bool, speed_max: float | None, ap
             if "material" in cloud.dtype.names:
                 comps["class_ids"] = cloud["material"].astype(np.uint16)
             extra = {}
-            if "id" in cloud.dtype.names:
+            if len(cloud) == 0:
+                pass  # an empty cloud (e.g. before insertion): AnyValues rejects empty batches
+            elif "id" in cloud.dtype.names:
                 extra["particle_id"] = cloud["id"].astype(np.uint32)
-            if "speed" in cloud.dtype.names:
+            if "speed" in cloud.dtype.names and len(cloud):
                 extra["speed"] = cloud["speed"].astype(np.float32)
             rec.log("/particles", rr.Points3D(**comps), rr.AnyValues(**extra) if extra else [])
             stats["clouds"] += 1

@@ -131,6 +131,40 @@ class CheckMcapTest(Base):
         self.assertEqual(rep["messages_read"], rep["messages_decoded"])
         self.assertIsNotNone(rep["truncation"])
 
+    def test_killed_inside_unfinished_chunk(self):
+        # What tilth's Rust writer (mcap crate) leaves when killed: the last chunk's record
+        # length is still u64::MAX and its data is cut short.
+        with open(self.sample, "rb") as f:
+            summary = make_reader(f).get_summary()
+            f.seek(0)
+            data = bytearray(f.read())
+        chunks = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)
+        last = chunks[len(chunks) // 2]
+        start = last.chunk_start_offset
+        data[start + 1 : start + 9] = b"\xff" * 8
+        dst = self.path("killed.mcap.partial")
+        with open(dst, "wb") as f:
+            f.write(bytes(data[: start + 200]))
+        self.check_fails(dst, "incomplete")
+        proc = run("check_mcap.py", dst, "--allow-partial", "--json", check=0)
+        rep = json.loads(proc.stdout)["files"][0]
+        self.assertIn("the last chunk was still being written", rep["truncation"])
+        # exactly the messages of the chunks before the unfinished one
+        from mcap.data_stream import ReadDataStream
+        from mcap.records import Chunk, Message
+        from mcap.stream_reader import breakup_chunk
+
+        expected = 0
+        with open(self.sample, "rb") as f:
+            for ci in chunks:
+                if ci.chunk_start_offset >= start:
+                    break
+                f.seek(ci.chunk_start_offset + 1 + 8)
+                chunk = Chunk.read(ReadDataStream(f))
+                expected += sum(isinstance(r, Message) for r in breakup_chunk(chunk))
+        self.assertGreater(expected, 0)
+        self.assertEqual(rep["messages_read"], expected)
+
     def test_truncated_inside_header_fails_even_if_allowed(self):
         dst = self.path("tiny.mcap.partial")
         with open(self.sample, "rb") as f:

@@ -45,7 +45,8 @@ fn pose(position: DVec3, orientation: DQuat) -> Pose {
     }
 }
 
-/// The identity pose (Rerun refuses point clouds without a pose).
+/// The identity pose: the issue asks for it, and Foxglove and Rerun then place the cloud
+/// explicitly in `world` instead of relying on a default.
 fn identity() -> Pose {
     pose(DVec3::ZERO, DQuat::IDENTITY)
 }
