@@ -135,6 +135,8 @@ pub fn run_job(
     summary
 }
 
+// The run's whole context, passed through once from `run_job`.
+#[allow(clippy::too_many_arguments)]
 fn simulate(
     plan: &Plan,
     run: &PlannedRun,

@@ -168,9 +168,10 @@ pub fn merge(out: &Path, manifests: Vec<Manifest>) -> Result<Manifest> {
             seed: row.seed,
         };
         let seen = Row::observe(out, &run, &first.fingerprint);
-        if seen.status != Status::Pending && row.status != Status::Running {
-            *row = seen;
-        } else if matches!(seen.status, Status::Done | Status::Failed) {
+        // A summary is final; a partial file means interrupted unless a shard still runs it.
+        let fin = matches!(seen.status, Status::Done | Status::Failed);
+        let stopped = seen.status == Status::Interrupted && row.status != Status::Running;
+        if fin || stopped {
             *row = seen;
         }
     }

@@ -305,3 +305,61 @@ fn sigterm_stops_cleanly_and_the_same_command_finishes() {
     assert!(manifest_rows(&out).iter().all(|r| r["status"] == "done"));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn two_thread_runs_take_two_cores_and_give_the_same_results() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let base = std::env::temp_dir().join(format!("tilth-two-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let text = std::fs::read_to_string(sweeps("tiny.toml"))
+        .unwrap()
+        .replace(
+            "scene = \"tiny_scene.toml\"",
+            &format!("scene = {:?}\nthreads = 2", sweeps("tiny_scene.toml")),
+        );
+    let two = base.join("two.toml");
+    std::fs::write(&two, text).unwrap();
+    // A budget of one core cannot hold a 2-thread run: refused before anything runs.
+    let refused = tilth()
+        .args(["sweep", "run", "--cores", "1", "--quiet", "--out"])
+        .arg(base.join("refused"))
+        .arg(&two)
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("experiment.threads = 2"));
+    if cores < 2 {
+        eprintln!("SKIPPED: the rest needs 2 cores");
+        return;
+    }
+    let out2 = base.join("out2");
+    let r = tilth()
+        .args(["sweep", "run", "--cores", "2", "--quiet", "--out"])
+        .arg(&out2)
+        .arg(&two)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let out1 = base.join("out1");
+    assert!(run_sweep(&out1).status.success());
+    for id in 1..=4 {
+        let s: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out2.join(format!("runs/{id:03}/summary.json"))).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(s["cores"].as_array().unwrap().len(), 2, "run {id}");
+        assert_eq!(s["report"]["threads"], 2);
+    }
+    // Same seeds, 1 or 2 threads: the same bits, so the same observables.
+    let (a, b) = (
+        csv(&out1.join("results.csv")),
+        csv(&out2.join("results.csv")),
+    );
+    for (x, y) in a.iter().zip(&b) {
+        for k in ["heap_cone_angle_deg", "kinetic_energy_j", "particles"] {
+            assert_eq!(x[k], y[k], "{k}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&base);
+}
