@@ -698,6 +698,17 @@ impl Simulation {
         self.pairs.len()
     }
 
+    /// Switches wall `k` on or off (a mould removed, a box wall added): an inactive wall
+    /// touches nothing. Its contacts end now; the neighbour lists are rebuilt at once.
+    pub fn set_wall_active(&mut self, k: usize, active: bool) {
+        if self.walls[k].active != active {
+            self.walls[k].active = active;
+            self.walls[k].force = DVec3::ZERO;
+            self.walls[k].torque = DVec3::ZERO;
+            self.rebuild();
+        }
+    }
+
     /// Contacts that currently carry force (pairs, then walls).
     pub fn contact_counts(&self) -> (usize, usize) {
         let pairs = self
@@ -847,6 +858,9 @@ fn build_wall_contacts(
                 };
                 let mut k = old_row.start;
                 for (w, wall) in walls.iter().enumerate() {
+                    if !wall.active {
+                        continue;
+                    }
                     hits.clear();
                     wall.shape
                         .hits(p.position[i] - wall.offset, p.radius[i] + extra, &mut hits);

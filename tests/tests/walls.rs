@@ -261,3 +261,47 @@ fn prescribed_motion_moves_the_wall_and_records_force_and_torque() {
         s.walls[0].torque
     );
 }
+
+#[test]
+fn a_deactivated_wall_lets_go_and_the_wall_below_catches() {
+    // A sphere resting on a floor carries its weight; switched off, the floor lets it fall
+    // freely (z(t) = z0 - g t^2 / 2) until the wall below catches it.
+    let r = 1e-3;
+    let g = 9.81;
+    let mut s = sim(
+        frictionless(),
+        one(DVec3::new(0.0, 0.0, r), DVec3::ZERO),
+        vec![floor(), {
+            let mut w = floor();
+            w.offset = DVec3::new(0.0, 0.0, -0.01);
+            w.name = "lower".into();
+            w
+        }],
+        1e-6,
+        DVec3::new(0.0, 0.0, -g),
+        1,
+    );
+    s.run(20_000).unwrap();
+    let weight = s.particles.mass[0] * g;
+    assert!(
+        (s.walls[0].force.z + weight).abs() < 0.01 * weight,
+        "{}",
+        s.walls[0].force
+    );
+    let z0 = s.particles.position[0].z;
+    s.set_wall_active(0, false);
+    assert_eq!(s.walls[0].force, DVec3::ZERO);
+    let n = 20_000;
+    s.run(n).unwrap();
+    let t = n as f64 * 1e-6;
+    let z = s.particles.position[0].z;
+    assert!(
+        (z - (z0 - 0.5 * g * t * t)).abs() < 1e-3 * 0.5 * g * t * t,
+        "z = {z}"
+    );
+    assert_eq!(s.walls[0].force, DVec3::ZERO);
+    // The lower floor catches it.
+    s.run(200_000).unwrap();
+    assert!((s.particles.position[0].z - (-0.01 + r)).abs() < 1e-4);
+    assert!((s.walls[1].force.z + weight).abs() < 0.02 * weight);
+}

@@ -74,6 +74,8 @@ pub struct Wall {
     /// in the last step, N and N m.
     pub force: DVec3,
     pub torque: DVec3,
+    /// An inactive wall touches nothing (see `Simulation::set_wall_active`).
+    pub active: bool,
 }
 
 impl Wall {
@@ -91,6 +93,7 @@ impl Wall {
             velocity,
             force: DVec3::ZERO,
             torque: DVec3::ZERO,
+            active: true,
         }
     }
 
