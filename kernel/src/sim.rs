@@ -6,7 +6,8 @@
 //! 2. walls move; factories create particles;
 //! 3. rebuild the pair list and wall contact list when something moved more than skin/2
 //!    (history is carried over);
-//! 4. pair phase: every listed pair's force and torques, written to the pair's own slot;
+//! 4. pair phase: every listed pair's force and torques (contact laws, then the bond if
+//!    intact), written to the pair's own slot;
 //! 5. particle phase: each particle sums its pairs' outputs, its wall contacts and gravity in
 //!    a fixed order;
 //! 6. second half kick, applied in the particle phase as each force is known, with the
@@ -15,7 +16,7 @@
 //! Every sum runs in an order that does not depend on the thread count, so 1 and 2 threads
 //! give the same bits (work is split in fixed chunks of [`CHUNK`] rows).
 
-use crate::contact::{Contact, ContactModel, ContactOut};
+use crate::contact::{BondState, BondStatus, Contact, ContactModel, ContactOut};
 use crate::error::{KernelError, Result};
 use crate::factory::Factory;
 use crate::neighbor::{CHUNK, PairList};
@@ -24,6 +25,7 @@ use crate::timestep::{WARN_FRACTION, rayleigh_time};
 use crate::wall::{Hit, Wall};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 
 /// Steps between spatial reorderings of the particles (cell order, for cache locality; as
 /// LAMMPS's `atom_modify sort`). A fixed step schedule, not a rebuild count, so that runs
@@ -99,6 +101,11 @@ pub struct Simulation {
     speed_limit: f64,
     /// Set by a reorder, consumed by the rebuild that follows it.
     pending_order: Option<Vec<u32>>,
+    /// Bonds whose pair left the neighbour list (broken ones that drifted apart), by
+    /// (smaller id, larger id), with the time they broke: still reported, never re-formed.
+    retired_bonds: BTreeMap<(u32, u32), f64>,
+    /// Whether bonds were ever formed; rebuilds then retire the bonded pairs they drop.
+    bonded: bool,
     /// Shared so `run` can enter it once; nested `install` calls from inside are direct calls.
     pool: std::sync::Arc<rayon::ThreadPool>,
 }
@@ -297,6 +304,8 @@ impl Simulation {
             wall_ref_offset: vec![DVec3::ZERO; nwalls],
             speed_limit,
             pending_order: None,
+            retired_bonds: BTreeMap::new(),
+            bonded: false,
             pool,
         };
         sim.check_overlaps()?;
@@ -426,6 +435,9 @@ impl Simulation {
 
     fn rebuild(&mut self) {
         self.rebuilds += 1;
+        let bonded_before = self
+            .bonded
+            .then(|| self.bonded_pairs(self.pending_order.as_deref()));
         let p = &self.particles;
         let extra = self.extra;
         let pairs = &mut self.pairs;
@@ -444,6 +456,57 @@ impl Simulation {
         for (r, w) in self.wall_ref_offset.iter_mut().zip(&self.walls) {
             *r = w.offset;
         }
+        if let Some(before) = bonded_before {
+            self.retire_dropped_bonds(before);
+        }
+    }
+
+    /// The bonded pairs of the current list by (smaller id, larger id), with their status.
+    /// `old_of_new`: a reorder applied to the particles since the list was built.
+    fn bonded_pairs(&self, old_of_new: Option<&[u32]>) -> Vec<((u32, u32), BondStatus)> {
+        let p = &self.particles;
+        let ids: std::borrow::Cow<[u32]> = match old_of_new {
+            None => (&p.id[..]).into(),
+            Some(order) => {
+                let mut ids = vec![0; order.len()];
+                for (new, &old) in order.iter().enumerate() {
+                    ids[old as usize] = p.id[new];
+                }
+                ids.into()
+            }
+        };
+        let list = &self.pairs;
+        let stride = list.stride;
+        (0..list.len())
+            .filter_map(|k| {
+                let status = self
+                    .model
+                    .bond_status(&list.history[k * stride..(k + 1) * stride]);
+                let (a, b) = (ids[list.i[k] as usize], ids[list.j[k] as usize]);
+                (status != BondStatus::None).then_some(((a.min(b), a.max(b)), status))
+            })
+            .collect()
+    }
+
+    /// Keeps the bonds a rebuild dropped from the list. A broken one keeps its time; an
+    /// intact one can only have been dropped stretched beyond the bond law's reach, where its
+    /// tensile stress exceeds the strength, so it breaks now, as it would have in this step.
+    fn retire_dropped_bonds(&mut self, before: Vec<((u32, u32), BondStatus)>) {
+        let mut after: Vec<(u32, u32)> = self
+            .bonded_pairs(None)
+            .into_iter()
+            .map(|(k, _)| k)
+            .collect();
+        after.sort_unstable();
+        for (key, status) in before {
+            if after.binary_search(&key).is_err() {
+                let time = match status {
+                    BondStatus::Broken(t) => t,
+                    _ => self.time,
+                };
+                self.retired_bonds.insert(key, time);
+            }
+        }
     }
 
     /// Computes every force and torque. With `kick`, also applies the step's second half kick
@@ -451,6 +514,7 @@ impl Simulation {
     /// and returns the first particle in a failed state.
     fn compute_forces(&mut self, kick: bool) -> Option<(usize, Failure)> {
         let dt = self.dt;
+        let time = self.time;
         let p = &self.particles;
         let model = &self.model;
         let pairs = &mut self.pairs;
@@ -466,7 +530,7 @@ impl Simulation {
                     for (k, o) in out.iter_mut().enumerate() {
                         let (i, j) = (pi[base + k] as usize, pj[base + k] as usize);
                         let h = &mut hist[k * stride..(k + 1) * stride];
-                        *o = pair_force(p, model, i, j, h, dt).unwrap_or_default();
+                        *o = pair_force(p, model, i, j, h, dt, time).unwrap_or_default();
                     }
                 });
         });
@@ -709,6 +773,94 @@ impl Simulation {
         }
     }
 
+    /// Bonds every listed pair closer than the bond law's contact radius sum that has never
+    /// been bonded (a broken bond never re-forms). Returns how many bonds formed; none
+    /// without a bond law. New bonds carry no load. Call it between steps; the result does
+    /// not depend on the thread count.
+    pub fn form_bonds(&mut self) -> usize {
+        if !self.model.has_bond() {
+            return 0;
+        }
+        let p = &self.particles;
+        let list = &mut self.pairs;
+        let stride = list.stride;
+        let mut formed = 0;
+        for k in 0..list.len() {
+            let (i, j) = (list.i[k] as usize, list.j[k] as usize);
+            let h = &mut list.history[k * stride..(k + 1) * stride];
+            let key = (p.id[i].min(p.id[j]), p.id[i].max(p.id[j]));
+            if self.retired_bonds.contains_key(&key) {
+                continue;
+            }
+            if self.model.form_bond(
+                p.material[i] as usize,
+                p.material[j] as usize,
+                (p.radius[i], p.radius[j]),
+                (p.position[j] - p.position[i]).length(),
+                h,
+            ) {
+                formed += 1;
+            }
+        }
+        self.bonded |= formed > 0;
+        formed
+    }
+
+    /// Every bond ever formed, intact or broken, ordered by particle ids (`i < j`, stable
+    /// ids, not indices), with the loads on particle i (zero once broken) and the time it
+    /// broke.
+    pub fn bonds(&self) -> Vec<BondState> {
+        let p = &self.particles;
+        let list = &self.pairs;
+        let stride = list.stride;
+        let mut out: Vec<BondState> = (0..list.len())
+            .filter_map(|k| {
+                let (i, j) = (list.i[k] as usize, list.j[k] as usize);
+                let h = &list.history[k * stride..(k + 1) * stride];
+                let (loads, broken_time) =
+                    self.model
+                        .bond_loads(p.material[i] as usize, p.material[j] as usize, h)?;
+                // The list keeps each pair in the row of its smaller id.
+                debug_assert!(p.id[i] < p.id[j]);
+                Some(BondState {
+                    i: p.id[i],
+                    j: p.id[j],
+                    loads,
+                    broken_time,
+                })
+            })
+            .collect();
+        out.extend(self.retired_bonds.iter().map(|(&(i, j), &t)| BondState {
+            i,
+            j,
+            loads: Default::default(),
+            broken_time: Some(t),
+        }));
+        out.sort_unstable_by_key(|b| (b.i, b.j));
+        out
+    }
+
+    /// Numbers of intact and of broken bonds.
+    pub fn bond_counts(&self) -> (usize, usize) {
+        if !self.bonded {
+            return (0, 0);
+        }
+        let list = &self.pairs;
+        let stride = list.stride;
+        let (mut intact, mut broken) = (0, self.retired_bonds.len());
+        for k in 0..list.len() {
+            match self
+                .model
+                .bond_status(&list.history[k * stride..(k + 1) * stride])
+            {
+                BondStatus::Intact => intact += 1,
+                BondStatus::Broken(_) => broken += 1,
+                BondStatus::None => {}
+            }
+        }
+        (intact, broken)
+    }
+
     /// Contacts that currently carry force (pairs, then walls).
     pub fn contact_counts(&self) -> (usize, usize) {
         let pairs = self
@@ -737,6 +889,8 @@ impl Simulation {
             + w.feature.capacity() * 4
             + w.history.capacity() * 8
             + (w.force.capacity() + w.point.capacity()) * 24
+            // A B-tree entry (two ids and a time) with its share of the node, roughly.
+            + self.retired_bonds.len() * 24
     }
 
     /// FNV-1a hash of the bits of every position, velocity and spin, in particle-id order:
@@ -782,7 +936,8 @@ enum Failure {
     Escaped,
 }
 
-/// The force of listed pair (i, j), or `None` when they do not interact.
+/// The force of listed pair (i, j), or `None` when they do not interact. `time` stamps a
+/// bond that breaks.
 #[inline]
 fn pair_force(
     p: &Particles,
@@ -791,11 +946,12 @@ fn pair_force(
     j: usize,
     h: &mut [f64],
     dt: f64,
+    time: f64,
 ) -> Option<ContactOut> {
     let d = p.position[j] - p.position[i];
     let dist2 = d.length_squared();
     let rsum = p.radius[i] + p.radius[j];
-    if h[crate::contact::model::ACTIVE] == 0.0 && dist2 >= rsum * rsum {
+    if h[crate::contact::model::ACTIVE] == 0.0 && dist2 >= rsum * rsum && !model.bond_intact(h) {
         return None;
     }
     let dist = dist2.sqrt();
@@ -812,7 +968,7 @@ fn pair_force(
         (p.angular_velocity[i], p.angular_velocity[j]),
         dt,
     );
-    model.evaluate(p.material[i] as usize, p.material[j] as usize, &c, h)
+    model.evaluate_pair(p.material[i] as usize, p.material[j] as usize, &c, time, h)
 }
 
 /// Lists, for every particle, the wall features within `extra` of its surface, carrying the

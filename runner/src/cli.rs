@@ -1,6 +1,6 @@
 //! The command-line surface.
 
-use crate::commands::{bench, laws, run, sweep};
+use crate::commands::{bench, compare, laws, reduce, run, sweep};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -24,6 +24,10 @@ pub enum Command {
         #[command(subcommand)]
         command: sweep::SweepCommand,
     },
+    /// Reduce run MCAP files to the study's numbers: repose angle, peak shear force, UCS.
+    Reduce(reduce::ReduceArgs),
+    /// Simulate every measured condition of a data file and compare (compare.json/csv/md).
+    Compare(compare::CompareArgs),
     /// Speed benchmarks.
     Bench {
         #[command(subcommand)]
@@ -38,5 +42,7 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Laws => laws::laws(out),
         Command::Bench { which } => bench::bench(&which, out),
         Command::Sweep { command } => sweep::sweep(&command, out),
+        Command::Reduce(args) => reduce::reduce_cmd(&args, out),
+        Command::Compare(args) => compare::compare(&args, out),
     }
 }

@@ -9,6 +9,7 @@
 pub mod cli;
 pub mod commands;
 pub mod config;
+pub mod lab;
 pub mod progress;
 pub mod record;
 pub mod sweep;

@@ -1,5 +1,5 @@
 //! tilth-tools: offline reductions of runs (repose angle, peak shear force, compressive
-//! strength) and statistics. This issue only provides the crate; the reducers land with the
-//! virtual-laboratory issue.
+//! strength: [`reduce`]) and statistics (experimental designs: [`design`]).
 
 pub mod design;
+pub mod reduce;

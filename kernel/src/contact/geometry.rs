@@ -14,6 +14,9 @@ pub struct Contact {
     pub r_eff: f64,
     /// m* = m_i m_j / (m_i + m_j), kg (m_i for a wall).
     pub m_eff: f64,
+    /// Radii of the two bodies, m (infinite for a wall).
+    pub radius_i: f64,
+    pub radius_j: f64,
     /// Distances from the centres to the contact point, m.
     pub arm_i: f64,
     pub arm_j: f64,
@@ -58,6 +61,8 @@ impl Contact {
             normal: n,
             r_eff: r.0 * r.1 / (r.0 + r.1),
             m_eff: m.0 * m.1 / (m.0 + m.1),
+            radius_i: r.0,
+            radius_j: r.1,
             arm_i,
             arm_j,
             v_n,
@@ -102,6 +107,8 @@ impl Contact {
             normal: n,
             r_eff: r,
             m_eff: mass,
+            radius_i: r,
+            radius_j: f64::INFINITY,
             arm_i,
             arm_j: f64::INFINITY,
             v_n,

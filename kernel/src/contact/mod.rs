@@ -8,7 +8,11 @@
 //! 3. **tangential**: friction with history and a Coulomb cap (`mindlin`, ...);
 //! 4. **rolling**: rolling-resistance torques (`cdt`, `epsd`);
 //! 5. **extras**: any number of additive normal forces, which may act across a gap
-//!    (`capillary`).
+//!    (`capillary`);
+//! 6. **bond**: at most one bond law (`bond`, a parallel bond), acting on top of the
+//!    contact laws between particle pairs bonded by [`crate::sim::Simulation::form_bonds`],
+//!    also across a gap, until the bond breaks. A scene names it among the extras
+//!    (`extra = ["bond"]`); the builder puts it in its own slot.
 //!
 //! Laws never call each other; the pipeline hands each the outputs it needs. Each law is one
 //! file in [`laws`] and one line in its registry. Compatibility is checked once, in
@@ -23,7 +27,7 @@ pub mod laws;
 pub mod model;
 
 pub use geometry::Contact;
-pub use model::{ContactModel, ContactOut, ModelSpec, PairSpec};
+pub use model::{BondStatus, ContactModel, ContactOut, ModelSpec, PairSpec};
 
 use crate::material::Material;
 use crate::param::{ParamSpec, Params};
@@ -93,6 +97,60 @@ pub trait ExtraLaw: Send + Sync {
     }
 }
 
+/// The loads an intact bond carries (zero once broken). Sign conventions: `normal_force`
+/// is positive in compression (pushing the particles apart, like every normal force here)
+/// and negative in tension; the vectors are the force and moments acting *on particle i*
+/// (j gets the opposite), with `normal_moment` the twisting moment about the unit normal
+/// n (from i to j), i.e. the moment vector `normal_moment * n`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BondLoads {
+    /// N, positive in compression.
+    pub normal_force: f64,
+    /// Shear force on i, in the plane normal to n, N.
+    pub shear_force: DVec3,
+    /// Twisting moment on i about n, N m.
+    pub normal_moment: f64,
+    /// Bending moment on i, in the plane normal to n, N m.
+    pub shear_moment: DVec3,
+}
+
+/// One bond, for output: the stable particle ids (`i < j`), its loads and, once broken,
+/// the simulation time at which it broke.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BondState {
+    pub i: u32,
+    pub j: u32,
+    /// The loads on i (see [`BondLoads`] for the signs); zero for a broken bond.
+    pub loads: BondLoads,
+    /// `None` while intact; the time (s) of the step in which it broke.
+    pub broken_time: Option<f64>,
+}
+
+impl BondState {
+    pub fn intact(&self) -> bool {
+        self.broken_time.is_none()
+    }
+}
+
+/// Slot 6: a bond between two particles, formed on request
+/// ([`crate::sim::Simulation::form_bonds`]) and acting on top of the contact laws, also
+/// across a gap, until it breaks. The pipeline owns the bond's status (none, intact,
+/// broken) and its breaking time; the law keeps its loads in its history.
+pub trait BondLaw: Send + Sync {
+    /// Pairs whose centres are closer than `contact_ratio * (r_i + r_j)` bond when bonds are
+    /// formed.
+    fn contact_ratio(&self) -> f64;
+    /// How far beyond touching (m, >= 0) an intact bond between particles of radius up to
+    /// `r_max` can be stretched before it must have broken. Neighbour lists keep such pairs.
+    fn reach(&self, r_max: f64) -> f64;
+    /// Advances an intact bond by one step: updates its loads in `history` and returns the
+    /// force on i and the torques on i and j, or `None` when the bond breaks in this step
+    /// (the pipeline then marks it broken, records the time and zeroes the history).
+    fn force(&self, c: &Contact, history: &mut [f64]) -> Option<ContactOut>;
+    /// The loads kept in `history`.
+    fn loads(&self, history: &[f64]) -> BondLoads;
+}
+
 /// Which slot a law fills.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Slot {
@@ -101,6 +159,7 @@ pub enum Slot {
     Tangential,
     Rolling,
     Extra,
+    Bond,
 }
 
 impl Slot {
@@ -111,6 +170,7 @@ impl Slot {
             Slot::Tangential => "tangential",
             Slot::Rolling => "rolling",
             Slot::Extra => "extra",
+            Slot::Bond => "bond",
         }
     }
 }
@@ -122,6 +182,7 @@ pub enum BuiltLaw {
     Tangential(Box<dyn TangentialLaw>),
     Rolling(Box<dyn RollingLaw>),
     Extra(Box<dyn ExtraLaw>),
+    Bond(Box<dyn BondLaw>),
 }
 
 /// What a law's constructor gets: the two materials, their effective moduli and the

@@ -57,6 +57,15 @@ pub enum Motion {
         gain: f64,
         max_speed: f64,
     },
+    /// A servo along `axis` as [`Motion::Servo`], carried along at `velocity` (m/s, normal
+    /// to the axis): the lid of a shear box that follows the upper ring.
+    ServoCarried {
+        axis: DVec3,
+        target_force: f64,
+        gain: f64,
+        max_speed: f64,
+        velocity: DVec3,
+    },
 }
 
 /// A wall: a shape, its material index, its motion and its current state.
@@ -111,6 +120,16 @@ impl Wall {
                 let resist = -self.force.dot(axis);
                 axis * (gain * (target_force - resist)).clamp(-max_speed, max_speed)
             }
+            Motion::ServoCarried {
+                axis,
+                target_force,
+                gain,
+                max_speed,
+                velocity,
+            } => {
+                let resist = -self.force.dot(axis);
+                velocity + axis * (gain * (target_force - resist)).clamp(-max_speed, max_speed)
+            }
         };
     }
 
@@ -120,6 +139,11 @@ impl Wall {
             Motion::Fixed => 0.0,
             Motion::Velocity(v) => v.length(),
             Motion::Servo { max_speed, .. } => max_speed,
+            Motion::ServoCarried {
+                max_speed,
+                velocity,
+                ..
+            } => max_speed + velocity.length(),
         }
     }
 }

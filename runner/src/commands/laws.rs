@@ -6,12 +6,13 @@ use tilth_kernel::contact::Slot;
 use tilth_kernel::contact::laws::REGISTRY;
 
 /// The slots in pipeline order, with what a scene may put there.
-const SLOTS: [(Slot, &str); 5] = [
+const SLOTS: [(Slot, &str); 6] = [
     (Slot::Normal, "required, one law"),
     (Slot::Damping, "optional, one law"),
     (Slot::Tangential, "optional, one law"),
     (Slot::Rolling, "optional, one law"),
     (Slot::Extra, "optional, a list of laws"),
+    (Slot::Bond, "optional, one law; named in [contact] extra"),
 ];
 
 pub fn laws(out: &mut dyn Write) -> Result<()> {

@@ -1,7 +1,9 @@
 //! The subcommands.
 
 pub mod bench;
+pub mod compare;
 pub mod laws;
+pub mod reduce;
 pub mod report;
 pub mod run;
 pub mod sweep;

@@ -22,9 +22,29 @@ pub struct RunArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Experiment files: the output directory for run.mcap and summary.json
+    /// (default `runs/<file stem>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Experiment files: use the test's coarse preset (bigger particles, less material;
+    /// under a minute).
+    #[arg(long)]
+    pub coarse: bool,
 }
 
 pub fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
+    if let Some(file) = &args.file {
+        let text = std::fs::read_to_string(file)
+            .with_context(|| format!("{}: cannot read", file.display()))?;
+        let is_experiment = toml::from_str::<toml::Value>(&text)
+            .is_ok_and(|v| crate::lab::experiment::is_experiment(&v));
+        if is_experiment {
+            return run_experiment(args, file, out);
+        }
+    }
+    if args.coarse || args.out.is_some() {
+        anyhow::bail!("--coarse and --out are for experiment files (experiment = \"...\")");
+    }
     let t0 = Instant::now();
     let loaded = config::load_or_demo(args.file.as_ref(), args.threads.map(|t| t as usize))?;
     let setup_seconds = t0.elapsed().as_secs_f64();
@@ -89,4 +109,68 @@ pub fn simulate(
         particle_steps,
         samples,
     ))
+}
+
+/// `tilth run EXPERIMENT`: one run through the sweep machinery (pinned core, MCAP, summary).
+fn run_experiment(args: &RunArgs, file: &std::path::Path, out: &mut dyn Write) -> Result<()> {
+    use crate::sweep::execute::{self, Options};
+    use crate::sweep::job::{Status, read_summary, run_dir};
+    let mut plan = crate::sweep::Plan::single(file, args.coarse)?;
+    if let Some(t) = args.threads {
+        plan.threads = t as usize;
+    }
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs").join(&plan.name));
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
+        signal_hook::flag::register(sig, stop.clone())?;
+    }
+    let opts = Options {
+        out: dir.clone(),
+        cores: Some(plan.threads),
+        shard: None,
+        retry_failed: true,
+        show_progress: !args.quiet,
+        pin: false,
+    };
+    // A finished run in the directory is not run again: say so.
+    let outcome = execute::execute(&plan, &opts, stop)?;
+    let summary = read_summary(&run_dir(&dir, 1));
+    let row = &outcome.rows[0];
+    if args.json {
+        let v = summary
+            .as_ref()
+            .map(serde_json::to_value)
+            .transpose()?
+            .unwrap_or(serde_json::Value::Null);
+        serde_json::to_writer_pretty(&mut *out, &v)?;
+        writeln!(out)?;
+    } else if let Some(s) = &summary {
+        writeln!(out, "experiment   {} ({})", plan.origin, plan.title)?;
+        writeln!(out, "status       {}", s.status.as_str())?;
+        writeln!(out, "wall time    {:.1} s", s.wall_seconds)?;
+        if let Some(x) = &s.experiment {
+            writeln!(out, "results      {}", serde_json::to_string_pretty(x)?)?;
+        }
+        writeln!(out, "files        {}", run_dir(&dir, 1).display())?;
+        if outcome.ran == 0 {
+            writeln!(
+                out,
+                "(already done in {}; delete it to run again)",
+                dir.display()
+            )?;
+        }
+    }
+    match row.status {
+        Status::Done => Ok(()),
+        Status::Interrupted => Err(super::sweep::SweepEnd::Interrupted.into()),
+        _ => Err(anyhow::anyhow!(
+            "{}: {}",
+            plan.origin,
+            row.error.clone().unwrap_or_else(|| "the run failed".into())
+        )),
+    }
 }

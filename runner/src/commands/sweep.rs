@@ -207,6 +207,7 @@ fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
         shard,
         retry_failed: args.retry_failed,
         show_progress: !args.quiet,
+        pin: true,
     };
     let shard_text = shard
         .map(|(i, n)| format!(", shard {i}/{n}"))

@@ -30,6 +30,9 @@ pub struct Options {
     /// Run failed runs again instead of keeping their failure.
     pub retry_failed: bool,
     pub show_progress: bool,
+    /// Pin each run to its cores (a sweep); a single `tilth run` leaves placement to the OS,
+    /// so that two of them started side by side do not share one core.
+    pub pin: bool,
 }
 
 /// The cores to use and whether to pin to them.
@@ -93,7 +96,8 @@ pub struct Outcome {
 
 /// Runs every run of `plan` in this shard that is not done yet.
 pub fn execute(plan: &Plan, opts: &Options, stop: Arc<AtomicBool>) -> Result<Outcome> {
-    let budget = budget(opts.cores)?;
+    let mut budget = budget(opts.cores)?;
+    budget.pin &= opts.pin;
     if plan.threads > budget.cores.len() {
         bail!(
             "{}: experiment.threads = {} but the core budget is {}; lower threads or raise --cores",
@@ -285,6 +289,9 @@ pub fn write_results(plan: &Plan, out: &Path) -> Result<Vec<Vec<String>>> {
     head.extend(
         [
             "status",
+            "repose_angle_deg",
+            "peak_shear_force_n",
+            "ucs_kpa",
             "heap_cone_angle_deg",
             "heap_height_m",
             "particles",
@@ -310,6 +317,9 @@ pub fn write_results(plan: &Plan, out: &Path) -> Result<Vec<Vec<String>>> {
         ];
         line.extend(plan.factors.iter().map(|f| num(run.values[&f.name])));
         line.push(row.status.as_str().to_string());
+        for key in ["repose_angle_deg", "peak_shear_force_n", "ucs_kpa"] {
+            line.push(get(&|s| s.reduced.as_ref()?.get(key)?.as_f64()));
+        }
         line.push(get(&|s| s.heap.as_ref()?.get("cone_angle_deg")?.as_f64()));
         line.push(get(&|s| s.heap.as_ref()?.get("height_m")?.as_f64()));
         line.push(get(&|s| s.report.as_ref()?.get("particles")?.as_f64()));
@@ -330,14 +340,17 @@ pub fn write_results(plan: &Plan, out: &Path) -> Result<Vec<Vec<String>>> {
 /// The results table, aligned, for the terminal.
 pub fn print_table(table: &[Vec<String>], out: &mut dyn Write) -> Result<()> {
     let cols = table.first().map_or(0, Vec::len);
-    // The MCAP path is long and in results.csv; leave it out of the terminal table.
-    let shown = cols.saturating_sub(1);
-    let widths: Vec<usize> = (0..shown)
+    // The MCAP path is long and in results.csv; columns empty in every row say nothing.
+    let shown: Vec<usize> = (0..cols.saturating_sub(1))
+        .filter(|&c| table.iter().skip(1).any(|l| !l[c].is_empty()))
+        .collect();
+    let widths: Vec<usize> = (0..cols)
         .map(|c| table.iter().map(|l| l[c].len()).max().unwrap_or(0))
         .collect();
     for line in table {
-        let cells: Vec<String> = (0..shown)
-            .map(|c| format!("{:>w$}", line[c], w = widths[c]))
+        let cells: Vec<String> = shown
+            .iter()
+            .map(|&c| format!("{:>w$}", line[c], w = widths[c]))
             .collect();
         writeln!(out, "{}", cells.join("  "))?;
     }

@@ -7,7 +7,7 @@
 use super::observe::{self, Heap};
 use super::plan::{Plan, PlannedRun, innermost};
 use crate::commands::report::RunReport;
-use crate::config;
+use crate::lab::protocol::{Control, Protocol};
 use crate::record::writer::RunLayout;
 use crate::record::{Recorder, RecorderStats, snapshot};
 use anyhow::{Context, Result};
@@ -18,6 +18,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
+
+/// Progress is shown in thousandths.
+const PROGRESS_SCALE: u64 = 1000;
 
 /// Steps between looks at the stop flag.
 const STOP_CHECK: u64 = 1000;
@@ -64,6 +67,13 @@ pub struct RunSummary {
     pub recorder: Option<RecorderStats>,
     /// Cores the run was pinned to.
     pub cores: Vec<usize>,
+    /// The observable reduced from the run's MCAP file by the study's method
+    /// (`repose_angle_deg`, `peak_shear_force_n` or `ucs_kpa`), or `{"error": ...}`.
+    #[serde(default)]
+    pub reduced: Option<serde_json::Value>,
+    /// The experiment's own results (settling, phases, inertial number, warnings).
+    #[serde(default)]
+    pub experiment: Option<serde_json::Value>,
 }
 
 /// Shared with the sweep's progress display.
@@ -115,6 +125,8 @@ pub fn run_job(
         report: None,
         recorder: None,
         cores: cores.iter().map(|c| c.id).collect(),
+        experiment: None,
+        reduced: None,
     };
     match simulate(plan, run, &dir, cores, pin, stop, live, &mut summary) {
         Ok(status) => summary.status = status,
@@ -152,20 +164,38 @@ fn simulate(
         let _ = std::fs::remove_file(dir.join(stale));
     }
     let origin = format!("{} (run {})", plan.scene.origin, run.id);
-    let prepared = config::prepare_value(
-        plan.scene_for(run)?,
-        &origin,
-        &plan.scene.dir,
-        Some(plan.threads),
-    )?;
+    let (prepared, mut protocol) = plan.build(run)?;
     let rates = plan.record.resolve(prepared.setup.dt)?;
     let wall_names: Vec<String> = prepared.info.walls.iter().map(|(n, _)| n.clone()).collect();
     let tray = observe::find_tray(&wall_names, &prepared.wall_shapes);
+    let mut units = units();
+    units.extend(protocol.units());
+    let mut metadata = metadata(plan, run);
+    let mut experiment = protocol.metadata();
+    if experiment.is_empty() {
+        // A plain scene with a tray: the repose reducer can measure its heap.
+        if let Some(t) = tray {
+            experiment = [
+                ("type", "repose".to_string()),
+                ("tray_radius_m", t.radius.to_string()),
+                ("tray_top_z_m", t.centre[2].to_string()),
+                ("tray_centre_x_m", t.centre[0].to_string()),
+                ("tray_centre_y_m", t.centre[1].to_string()),
+            ]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
+        }
+    }
+    let kind = experiment.get("type").cloned();
+    if !experiment.is_empty() {
+        metadata.insert("tilth.experiment".into(), experiment);
+    }
     let layout = RunLayout {
         wall_names,
         wall_shapes: prepared.wall_shapes.clone(),
-        metadata: metadata(plan, run),
-        units: units(),
+        metadata,
+        units,
         spheres: plan.record.spheres,
         flush_frames: plan.record.flush_frames,
     };
@@ -178,9 +208,8 @@ fn simulate(
     })))?;
     let info = loaded.info.clone();
     let threads = loaded.threads;
-    let steps = loaded.steps;
     let mut sim = loaded.sim;
-    live.steps.store(steps, Ordering::Relaxed);
+    live.steps.store(PROGRESS_SCALE, Ordering::Relaxed);
     // The writer shares the run's first core: its time counts against the run's budget.
     let writer_core = pinned.first().copied();
     let mut recorder = Recorder::start(&dir.join("run.mcap"), layout, move || {
@@ -188,7 +217,11 @@ fn simulate(
             core_affinity::set_for_current(c);
         }
     })?;
-    let extra = |sim: &tilth_kernel::sim::Simulation| -> Vec<(String, f64)> {
+    let extra = |sim: &tilth_kernel::sim::Simulation, protocol: &dyn Protocol| {
+        let own = protocol.scalars(sim);
+        if !own.is_empty() {
+            return own;
+        }
         tray.map(|t| {
             let h = observe::heap(sim, t);
             vec![
@@ -198,7 +231,10 @@ fn simulate(
         })
         .unwrap_or_default()
     };
-    let record = |sim: &tilth_kernel::sim::Simulation, rec: &mut Recorder| -> Result<()> {
+    let record = |sim: &tilth_kernel::sim::Simulation,
+                  protocol: &dyn Protocol,
+                  rec: &mut Recorder|
+     -> Result<()> {
         let step = sim.step;
         if crate::record::FrameRates::due(rates.particles, step) {
             rec.send(snapshot::particles(sim))?;
@@ -207,7 +243,7 @@ fn simulate(
             rec.send(snapshot::walls(sim))?;
         }
         if crate::record::FrameRates::due(rates.scalars, step) {
-            rec.send(snapshot::scalars(sim, &extra(sim)))?;
+            rec.send(snapshot::scalars(sim, &extra(sim, protocol)))?;
         }
         Ok(())
     };
@@ -215,14 +251,22 @@ fn simulate(
     let mut particle_steps: u64 = 0;
     let mut interrupted = false;
     let mut failure = None;
-    record(&sim, &mut recorder)?;
-    while sim.step < steps {
+    record(&sim, protocol.as_ref(), &mut recorder)?;
+    loop {
         if stop.load(Ordering::Relaxed) {
             interrupted = true;
             break;
         }
+        let k = match protocol.control(&mut sim) {
+            Ok(Control::Done) => break,
+            Ok(Control::Step(k)) => k.max(1),
+            Err(e) => {
+                failure = Some(e.context(origin.clone()));
+                break;
+            }
+        };
         let n = rates
-            .steps_to_next(sim.step, steps - sim.step)
+            .steps_to_next(sim.step, k)
             .min(STOP_CHECK - sim.step % STOP_CHECK);
         let before = sim.particles.len() as u64;
         if let Err(e) = sim.run(n) {
@@ -230,9 +274,11 @@ fn simulate(
             break;
         }
         particle_steps += n * before.max(sim.particles.len() as u64);
-        live.step.store(sim.step, Ordering::Relaxed);
-        record(&sim, &mut recorder)?;
+        let done = (protocol.progress(&sim).clamp(0.0, 1.0) * PROGRESS_SCALE as f64) as u64;
+        live.step.store(done, Ordering::Relaxed);
+        record(&sim, protocol.as_ref(), &mut recorder)?;
     }
+    summary.experiment = Some(protocol.summary(&sim)).filter(|v| !v.is_null());
     let wall = t0.elapsed().as_secs_f64();
     let complete = !interrupted && failure.is_none();
     summary.recorder = Some(recorder.finish(complete)?);
@@ -251,6 +297,9 @@ fn simulate(
         return Ok(Status::Interrupted);
     }
     summary.mcap = Some("run.mcap".into());
+    if let Some(kind) = kind {
+        summary.reduced = Some(reduce_run(&dir.join("run.mcap"), &kind));
+    }
     Ok(Status::Done)
 }
 
@@ -316,4 +365,47 @@ fn units() -> BTreeMap<String, String> {
     .into_iter()
     .map(|(a, b)| (a.to_string(), b.to_string()))
     .collect()
+}
+
+/// Reduces a finished run's MCAP file with the reducer of its experiment `kind`.
+pub fn reduce_run(path: &Path, kind: &str) -> serde_json::Value {
+    use tilth_tools::reduce;
+    let result = (|| -> Result<serde_json::Value> {
+        let run = reduce::read_run(path, &reduce::ReadOptions::default())?;
+        Ok(match kind {
+            "repose" => {
+                let r = reduce::repose(&run, &Default::default())?;
+                std::fs::write(
+                    path.with_file_name("repose.svg"),
+                    reduce::plot::repose_svg(&r)?,
+                )?;
+                serde_json::json!({
+                    "repose_angle_deg": r.analysis.repose_angle_deg,
+                    "cone_fit_deg": r.analysis.cone.angle_deg,
+                })
+            }
+            "direct_shear" => {
+                let r = reduce::shear(&run, &Default::default())?;
+                std::fs::write(
+                    path.with_file_name("shear.svg"),
+                    reduce::plot::shear_svg(&r)?,
+                )?;
+                serde_json::json!({
+                    "peak_shear_force_n": r.analysis.peak_shear_force_n,
+                    "max_inertial_number": r.analysis.max_inertial_number,
+                })
+            }
+            "ucs" => {
+                let r = reduce::ucs(&run, &Default::default())?;
+                std::fs::write(path.with_file_name("ucs.svg"), reduce::plot::ucs_svg(&r)?)?;
+                serde_json::json!({
+                    "ucs_kpa": r.analysis.ucs_kpa,
+                    "failure": format!("{:?}", r.analysis.failure),
+                    "max_inertial_number": r.analysis.max_inertial_number,
+                })
+            }
+            other => serde_json::json!({ "error": format!("no reducer for `{other}`") }),
+        })
+    })();
+    result.unwrap_or_else(|e| serde_json::json!({ "error": format!("{e:#}") }))
 }

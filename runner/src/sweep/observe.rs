@@ -14,6 +14,8 @@ use tilth_kernel::sim::Simulation;
 pub struct Tray {
     pub centre: [f64; 3],
     pub radius: f64,
+    /// Particles above this height (m) are not part of the heap (e.g. still in a funnel).
+    pub ceiling: f64,
 }
 
 /// The heap on the tray.
@@ -40,6 +42,7 @@ pub fn find_tray(names: &[String], shapes: &[WallShape]) -> Option<Tray> {
         } if *length == 0.0 && axis[0] == 0.0 && axis[1] == 0.0 => Some(Tray {
             centre: *base,
             radius: *radius_base,
+            ceiling: f64::INFINITY,
         }),
         _ => None,
     }
@@ -56,7 +59,7 @@ pub fn heap(sim: &Simulation, tray: Tray) -> Heap {
         let r = p.radius[k];
         let inside = (x.x - cx).hypot(x.y - cy) <= tray.radius;
         // Resting on the tray or on particles on it; falling particles far above are ignored.
-        if inside && x.z > cz && p.velocity[k].length() < 0.05 {
+        if inside && x.z > cz && x.z < tray.ceiling && p.velocity[k].length() < 0.05 {
             top = top.max(x.z + r - cz);
             n += 1;
         }

@@ -4,6 +4,8 @@ use super::design::{self, Expanded};
 use super::file::{self, FactorSection, Source, SweepFile};
 use super::target;
 use crate::config;
+use crate::lab::experiment;
+use crate::lab::protocol::{Protocol, RunSteps};
 use crate::record::RecordSection;
 use anyhow::{Context, Result, anyhow};
 use serde::Serialize;
@@ -52,6 +54,8 @@ pub struct SceneSource {
     pub origin: String,
     pub dir: PathBuf,
     pub text: String,
+    /// An experiment file (`experiment = "..."`) rather than a scene.
+    pub experiment: bool,
 }
 
 /// An expanded, checked sweep.
@@ -109,6 +113,7 @@ impl Plan {
                 origin: "sweeps/scenes/pile.toml (embedded)".into(),
                 dir: PathBuf::from("."),
                 text: DEMO_SCENE.to_string(),
+                experiment: false,
             },
             _ => {
                 let p = source.dir().join(scene_path);
@@ -118,15 +123,121 @@ impl Plan {
                         format!("experiment.scene: cannot read {}: {e}", p.display()),
                     )
                 })?;
+                let experiment = toml::from_str::<toml::Value>(&text)
+                    .is_ok_and(|v| experiment::is_experiment(&v));
                 SceneSource {
                     origin: p.display().to_string(),
                     dir: p.parent().map(Path::to_path_buf).unwrap_or_default(),
                     text,
+                    experiment,
                 }
             }
         };
         let plan = Self::expand(&source, sweep, scene)?;
         plan.check(&source)?;
+        Ok(plan)
+    }
+
+    /// A plan made in code: an experiment (TOML text, relative paths from `dir`) run once per
+    /// entry of `runs`, whose `values` set the `factors`' targets.
+    pub fn generated(
+        name: &str,
+        experiment_text: String,
+        dir: &Path,
+        factors: Vec<Factor>,
+        runs: Vec<PlannedRun>,
+    ) -> Result<Plan> {
+        let plan = Plan {
+            name: name.to_string(),
+            origin: format!("{name} (generated)"),
+            fingerprint: fnv1a(&[&experiment_text, &serde_json::to_string(&runs)?]),
+            sweep_text: experiment_text.clone(),
+            description: None,
+            title: format!("{} runs", runs.len()),
+            factors,
+            runs,
+            scene: SceneSource {
+                origin: format!("{name} experiment"),
+                dir: dir.to_path_buf(),
+                text: experiment_text,
+                experiment: true,
+            },
+            fixed: vec![],
+            threads: 1,
+            record: RecordSection::default(),
+        };
+        for run in &plan.runs {
+            plan.build(run).map_err(|e| {
+                anyhow!(
+                    "{name}: run {} ({}) is not valid: {}",
+                    run.id,
+                    describe(&run.values),
+                    innermost(&e)
+                )
+            })?;
+        }
+        Ok(plan)
+    }
+
+    /// One run of an experiment file (`tilth run EXPERIMENT`): no factors, its own seed.
+    pub fn single(path: &Path, coarse: bool) -> Result<Plan> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let value: toml::Value = toml::from_str(&text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| format!(":{}", text[..s.start].matches('\n').count() + 1))
+                .unwrap_or_default();
+            anyhow!("{}{line}: {}", path.display(), e.message())
+        })?;
+        let get = |k: &str| {
+            value
+                .get("simulation")
+                .and_then(|s| s.get(k))
+                .and_then(toml::Value::as_integer)
+        };
+        let seed = get("seed").unwrap_or(1).max(0) as u64;
+        let threads = get("threads").unwrap_or(1).max(1) as usize;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "experiment".into());
+        let fixed = if coarse {
+            vec![("coarse".to_string(), toml::Value::Boolean(true))]
+        } else {
+            vec![]
+        };
+        let plan = Plan {
+            name: name.clone(),
+            origin: path.display().to_string(),
+            sweep_text: text.clone(),
+            description: None,
+            title: if coarse {
+                "one run, coarse".into()
+            } else {
+                "one run".into()
+            },
+            factors: vec![],
+            runs: vec![PlannedRun {
+                id: 1,
+                std: 1,
+                replicate: 1,
+                coded: BTreeMap::new(),
+                values: BTreeMap::new(),
+                seed,
+            }],
+            fingerprint: fnv1a(&[&text, if coarse { "coarse" } else { "" }]),
+            scene: SceneSource {
+                origin: path.display().to_string(),
+                dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+                text,
+                experiment: true,
+            },
+            fixed,
+            threads,
+            record: RecordSection::default(),
+        };
+        plan.build(&plan.runs[0])?;
         Ok(plan)
     }
 
@@ -210,29 +321,77 @@ impl Plan {
         self
     }
 
-    /// The base scene with the fixed values set.
-    fn base_scene(&self) -> Result<toml::Value> {
+    /// The scene (or experiment) file with the fixed values, `values` and `seed` set;
+    /// experiment targets written `scene:PATH` are returned apart, for the generated scene.
+    fn input(
+        &self,
+        values: &[(&str, f64)],
+        seed: Option<u64>,
+    ) -> Result<(toml::Value, Vec<(String, toml::Value)>)> {
         let mut v: toml::Value = toml::from_str(&self.scene.text)
             .map_err(|e| anyhow!("{}: {}", self.scene.origin, e.message()))?;
+        let mut scene_overrides = vec![];
+        let mut set = |path: &str, value: toml::Value| -> Result<()> {
+            match path.strip_prefix("scene:") {
+                Some(p) if self.scene.experiment => {
+                    scene_overrides.push((p.to_string(), value));
+                    Ok(())
+                }
+                _ => target::set(&mut v, path, value),
+            }
+        };
         for (path, value) in &self.fixed {
-            target::set(&mut v, path, value.clone())
-                .map_err(|e| anyhow!("fixed `{path}`: {e} in {}", self.scene.origin))?;
+            set(path, value.clone()).map_err(|e| anyhow!("fixed `{path}`: {e}"))?;
         }
-        Ok(v)
+        for (name, x) in values {
+            let f = self
+                .factors
+                .iter()
+                .find(|f| f.name == *name)
+                .ok_or_else(|| anyhow!("no factor `{name}`"))?;
+            set(&f.target, toml::Value::Float(*x))?;
+        }
+        if let Some(seed) = seed {
+            if let Some(t) = v.as_table_mut() {
+                // An experiment file may leave [simulation] out entirely.
+                t.entry("simulation")
+                    .or_insert_with(|| toml::Value::Table(Default::default()));
+            }
+            target::set(&mut v, "simulation.seed", toml::Value::Integer(seed as i64))?;
+        }
+        Ok((v, scene_overrides))
     }
 
-    /// The scene of `run`: fixed values, factor values and the seed set.
-    pub fn scene_for(&self, run: &PlannedRun) -> Result<toml::Value> {
-        let mut v = self.base_scene()?;
-        for f in &self.factors {
-            target::set(&mut v, &f.target, toml::Value::Float(run.values[&f.name]))?;
+    /// Builds a checked, not yet started simulation and its protocol from `values`.
+    fn build_values(
+        &self,
+        values: &[(&str, f64)],
+        seed: Option<u64>,
+        tag: &str,
+    ) -> Result<(config::Prepared, Box<dyn Protocol>)> {
+        let (input, scene_overrides) = self.input(values, seed)?;
+        let origin = format!("{}{tag}", self.scene.origin);
+        if self.scene.experiment {
+            let built = experiment::build(input, &origin, &self.scene.dir, &scene_overrides)?;
+            let prepared =
+                experiment::prepare(&built, &origin, &self.scene.dir, Some(self.threads))?;
+            Ok((prepared, built.protocol))
+        } else {
+            let prepared =
+                config::prepare_value(input, &origin, &self.scene.dir, Some(self.threads))?;
+            let steps = prepared.steps;
+            Ok((prepared, Box::new(RunSteps { steps })))
         }
-        target::set(
-            &mut v,
-            "simulation.seed",
-            toml::Value::Integer(run.seed as i64),
-        )?;
-        Ok(v)
+    }
+
+    /// The simulation and protocol of `run`.
+    pub fn build(&self, run: &PlannedRun) -> Result<(config::Prepared, Box<dyn Protocol>)> {
+        let values: Vec<(&str, f64)> = self
+            .factors
+            .iter()
+            .map(|f| (f.name.as_str(), run.values[&f.name]))
+            .collect();
+        self.build_values(&values, Some(run.seed), &format!(" (run {})", run.id))
     }
 
     /// Refuses the sweep before anything runs: every fixed value, every factor at each of
@@ -242,25 +401,21 @@ impl Plan {
         self.record
             .resolve(1e-9)
             .map_err(|e| anyhow!("{}: [record] {e}", source.path.display()))?;
-        let base = {
+        for (path, value) in &sweep.fixed {
             let mut v: toml::Value = toml::from_str(&self.scene.text)
                 .map_err(|e| anyhow!("{}: {}", self.scene.origin, e.message()))?;
-            for (path, value) in &sweep.fixed {
-                let span = value.span();
-                target::set(&mut v, path, value.get_ref().clone())
-                    .map_err(|e| source.err(&span, format!("fixed `{path}`: {e}")))?;
+            if self.scene.experiment && path.starts_with("scene:") {
+                continue;
             }
-            v
-        };
-        let prepare = |v: toml::Value| {
-            config::prepare_value(v, &self.scene.origin, &self.scene.dir, Some(self.threads))
-                .map(|_| ())
-        };
-        prepare(base.clone()).map_err(|e| {
+            target::set(&mut v, path, value.get_ref().clone())
+                .map_err(|e| source.err(&value.span(), format!("fixed `{path}`: {e}")))?;
+        }
+        self.build_values(&[], None, "").map_err(|e| {
             anyhow!(
-                "{}: the scene {} with the sweep's fixed values is not valid: {e:#}",
+                "{}: {} with the sweep's fixed values is not valid: {}",
                 source.path.display(),
-                self.scene.origin
+                self.scene.origin,
+                innermost(&e)
             )
         })?;
         for (f, spanned) in self.factors.iter().zip(&sweep.factors) {
@@ -271,29 +426,37 @@ impl Plan {
                     levels.push((x, run.id));
                 }
             }
+            let target_span = spanned.get_ref().target.span();
+            let (mut probe, _) = self.input(&[], None)?;
+            if !(self.scene.experiment && f.target.starts_with("scene:")) {
+                target::set(&mut probe, &f.target, toml::Value::Float(levels[0].0)).map_err(
+                    |e| {
+                        source.err(
+                            &target_span,
+                            format!("factor `{}`: unknown target: {e}", f.name),
+                        )
+                    },
+                )?;
+            }
             for (x, id) in levels {
-                let span = spanned.get_ref().target.span();
-                let mut v = base.clone();
-                target::set(&mut v, &f.target, toml::Value::Float(x)).map_err(|e| {
-                    source.err(&span, format!("factor `{}`: unknown target: {e}", f.name))
-                })?;
-                prepare(v).map_err(|e| {
-                    source.err(
-                        &spanned.span(),
-                        format!(
-                            "factor `{}` = {x} (run {id}) is not allowed for `{}`: {}",
-                            f.name,
-                            f.target,
-                            innermost(&e)
-                        ),
-                    )
-                })?;
+                self.build_values(&[(f.name.as_str(), x)], None, "")
+                    .map_err(|e| {
+                        source.err(
+                            &spanned.span(),
+                            format!(
+                                "factor `{}` = {x} (run {id}) is not allowed for `{}`: {}",
+                                f.name,
+                                f.target,
+                                innermost(&e)
+                            ),
+                        )
+                    })?;
             }
         }
         for run in &self.runs {
-            prepare(self.scene_for(run)?).map_err(|e| {
+            self.build(run).map_err(|e| {
                 anyhow!(
-                    "{}: run {} ({}) is not a valid scene: {}",
+                    "{}: run {} ({}) is not valid: {}",
                     source.path.display(),
                     run.id,
                     describe(&run.values),

@@ -2,6 +2,7 @@
 
 mod config_files;
 mod end_to_end;
+mod experiments;
 mod external;
 mod sweeps;
 

@@ -22,6 +22,7 @@ registry! {
     cdt,
     epsd,
     capillary,
+    bond,
 }
 
 #[cfg(test)]

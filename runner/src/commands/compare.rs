@@ -1,0 +1,418 @@
+//! `tilth compare --model M.toml --data D.csv --out DIR`: simulate every measured condition
+//! and put simulated next to measured.
+//!
+//! Each measurement row (`test, conditions, observable, value, ...`; see
+//! data/li2022/README.md) becomes a run of its test's experiment at its conditions, with
+//! `--replicates` seeds so that the simulation's own scatter is known. The runs go through
+//! the sweep runner (pinned cores, one MCAP each, resumable: run the command again and it
+//! reuses what is done), one sweep per test in `DIR/<test>/`. Writes `DIR/compare.json`,
+//! `compare.csv` and `compare.md`.
+
+use crate::sweep::execute::{self, Options};
+use crate::sweep::job::{Status, read_summary, run_dir};
+use crate::sweep::plan::{Factor, Plan, PlannedRun};
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Model file (conditions -> parameters), e.g. models/li2022.toml.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Measurements (CSV), e.g. data/li2022/measurements.csv.
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Runs per measured condition, with different seeds.
+    #[arg(long, default_value_t = 1)]
+    pub replicates: usize,
+    /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
+    #[arg(long)]
+    pub coarse: bool,
+    /// Only these tests (comma-separated: repose, direct_shear, ucs).
+    #[arg(long, value_delimiter = ',')]
+    pub tests: Vec<String>,
+    /// Cores to use (default: all this process may use).
+    #[arg(long)]
+    pub cores: Option<usize>,
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// One measurement row.
+#[derive(Debug, Clone, Serialize)]
+pub struct Measurement {
+    pub row: usize,
+    pub test: String,
+    pub conditions: BTreeMap<String, f64>,
+    pub observable: String,
+    pub value: f64,
+    pub unit: String,
+}
+
+const CONDITIONS: [&str; 3] = ["moisture_pct", "firmness_mpa", "normal_pressure_pa"];
+
+/// Reads the measurement CSV; errors name the file, row and column.
+pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines
+        .next()
+        .ok_or_else(|| anyhow!("{}: empty file", path.display()))?
+        .split(',')
+        .map(str::trim)
+        .collect();
+    let col = |name: &str| -> Result<usize> {
+        head.iter().position(|h| *h == name).ok_or_else(|| {
+            anyhow!(
+                "{}: no column `{name}` (the header has {})",
+                path.display(),
+                head.join(", ")
+            )
+        })
+    };
+    let (ct, co, cv, cu) = (
+        col("test")?,
+        col("observable")?,
+        col("value")?,
+        col("unit")?,
+    );
+    let mut out = vec![];
+    for (k, line) in lines.enumerate() {
+        let row = k + 2;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let cell = |c: usize| cells.get(c).copied().unwrap_or("");
+        let test = cell(ct).to_string();
+        let observable = cell(co).to_string();
+        let expected = match test.as_str() {
+            "repose" => "repose_angle_deg",
+            "direct_shear" => "peak_shear_force_n",
+            "ucs" => "ucs_kpa",
+            other => bail!(
+                "{}:{row}: test `{other}` is unknown: allowed repose, direct_shear, ucs",
+                path.display()
+            ),
+        };
+        if observable != expected {
+            bail!(
+                "{}:{row}: a {test} test measures `{expected}`, not `{observable}`",
+                path.display()
+            );
+        }
+        let value: f64 = cell(cv).parse().map_err(|_| {
+            anyhow!(
+                "{}:{row}: value `{}` is not a number",
+                path.display(),
+                cell(cv)
+            )
+        })?;
+        let mut conditions = BTreeMap::new();
+        for name in CONDITIONS {
+            if let Ok(c) = col(name) {
+                if !cell(c).is_empty() {
+                    let x: f64 = cell(c).parse().map_err(|_| {
+                        anyhow!(
+                            "{}:{row}: {name} `{}` is not a number",
+                            path.display(),
+                            cell(c)
+                        )
+                    })?;
+                    conditions.insert(name.to_string(), x);
+                }
+            }
+        }
+        out.push(Measurement {
+            row,
+            test,
+            conditions,
+            observable,
+            value,
+            unit: cell(cu).to_string(),
+        });
+    }
+    Ok(out)
+}
+
+/// One line of the comparison.
+#[derive(Debug, Clone, Serialize)]
+pub struct Compared {
+    #[serde(flatten)]
+    pub measurement: Measurement,
+    /// Simulated values of the replicates that finished.
+    pub simulated: Vec<f64>,
+    pub simulated_mean: Option<f64>,
+    /// Sample standard deviation over replicates (needs 2).
+    pub simulated_scatter: Option<f64>,
+    pub residual: Option<f64>,
+    pub relative_error: Option<f64>,
+    /// residual / scatter, when there is scatter.
+    pub z_score: Option<f64>,
+    /// Why a replicate has no value.
+    pub problems: Vec<String>,
+}
+
+fn experiment_text(test: &str, model: &Path, coarse: bool) -> String {
+    format!(
+        "format_version = 1\nexperiment = \"{test}\"\nmodel = {:?}\ncoarse = {coarse}\n[conditions]\n",
+        model.display().to_string()
+    )
+}
+
+pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
+    if args.replicates == 0 {
+        bail!("--replicates 0 is out of range: allowed 1 or more");
+    }
+    let model = std::path::absolute(&args.model)?;
+    if !model.exists() {
+        bail!("{}: no such model file", args.model.display());
+    }
+    let rows = read_measurements(&args.data)?;
+    let mut tests: Vec<String> = vec![];
+    for m in &rows {
+        if !tests.contains(&m.test) && (args.tests.is_empty() || args.tests.contains(&m.test)) {
+            tests.push(m.test.clone());
+        }
+    }
+    if let Some(t) = args
+        .tests
+        .iter()
+        .find(|t| !["repose", "direct_shear", "ucs"].contains(&t.as_str()))
+    {
+        bail!("--tests: `{t}` is unknown: allowed repose, direct_shear, ucs");
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
+        signal_hook::flag::register(sig, stop.clone())?;
+    }
+    // Plan every test first, so that a bad row stops everything before any run.
+    let mut plans = vec![];
+    for test in &tests {
+        let mine: Vec<&Measurement> = rows.iter().filter(|m| &m.test == test).collect();
+        let mut factors = vec![factor("moisture_pct", "conditions.moisture_pct")];
+        if test != "repose" {
+            factors.push(factor("firmness_mpa", "conditions.firmness_mpa"));
+        }
+        if test == "direct_shear" {
+            factors.push(factor("normal_pressure_pa", "direct_shear.normal_pressure"));
+        }
+        let mut runs = vec![];
+        for m in &mine {
+            for r in 0..args.replicates {
+                let mut values = BTreeMap::new();
+                for f in &factors {
+                    let v = m.conditions.get(&f.name).ok_or_else(|| {
+                        anyhow!(
+                            "{}:{}: a {test} row needs `{}`",
+                            args.data.display(),
+                            m.row,
+                            f.name
+                        )
+                    })?;
+                    values.insert(f.name.clone(), *v);
+                }
+                runs.push(PlannedRun {
+                    id: runs.len() + 1,
+                    std: m.row,
+                    replicate: r + 1,
+                    coded: BTreeMap::new(),
+                    values,
+                    seed: 1 + r as u64,
+                });
+            }
+        }
+        let text = experiment_text(test, &model, args.coarse);
+        let plan = Plan::generated(test, text, Path::new("."), factors, runs)
+            .with_context(|| format!("{}: rows of test {test}", args.data.display()))?;
+        plans.push((test.clone(), plan));
+    }
+    let mut compared = vec![];
+    for (test, plan) in &plans {
+        let dir = args.out.join(test);
+        if !args.quiet {
+            eprintln!("{test}: {} runs into {}", plan.runs.len(), dir.display());
+        }
+        let opts = Options {
+            out: dir.clone(),
+            cores: args.cores,
+            shard: None,
+            retry_failed: false,
+            show_progress: !args.quiet,
+            pin: true,
+        };
+        let outcome = execute::execute(plan, &opts, stop.clone())?;
+        if outcome.interrupted {
+            return Err(super::sweep::SweepEnd::Interrupted.into());
+        }
+        for m in rows.iter().filter(|m| &m.test == test) {
+            let mut sims = vec![];
+            let mut problems = vec![];
+            for run in plan.runs.iter().filter(|r| r.std == m.row) {
+                let s = read_summary(&run_dir(&dir, run.id));
+                let v = s
+                    .as_ref()
+                    .and_then(|s| s.reduced.as_ref()?.get(&m.observable)?.as_f64());
+                match (v, s) {
+                    (Some(v), Some(s)) if s.status == Status::Done => sims.push(v),
+                    (_, Some(s)) => problems.push(format!(
+                        "run {}: {}",
+                        run.id,
+                        s.error
+                            .or_else(|| s
+                                .reduced
+                                .and_then(|r| r.get("error").map(|e| e.to_string())))
+                            .unwrap_or_else(|| s.status.as_str().to_string())
+                    )),
+                    (_, None) => problems.push(format!("run {}: no summary", run.id)),
+                }
+            }
+            compared.push(summarize(m.clone(), sims, problems));
+        }
+    }
+    write_outputs(args, &compared, out)
+}
+
+fn factor(name: &str, target: &str) -> Factor {
+    Factor {
+        name: name.into(),
+        target: target.into(),
+        label: None,
+        unit: None,
+        low: f64::NAN,
+        high: f64::NAN,
+    }
+}
+
+fn summarize(m: Measurement, sims: Vec<f64>, problems: Vec<String>) -> Compared {
+    let n = sims.len() as f64;
+    let mean = (!sims.is_empty()).then(|| sims.iter().sum::<f64>() / n);
+    let scatter = (sims.len() >= 2).then(|| {
+        let mu = mean.unwrap_or(0.0);
+        (sims.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+    });
+    let residual = mean.map(|s| s - m.value);
+    Compared {
+        relative_error: residual.map(|r| r / m.value),
+        z_score: residual
+            .zip(scatter)
+            .filter(|(_, s)| *s > 0.0)
+            .map(|(r, s)| r / s),
+        measurement: m,
+        simulated: sims,
+        simulated_mean: mean,
+        simulated_scatter: scatter,
+        residual,
+        problems,
+    }
+}
+
+fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> Result<()> {
+    std::fs::create_dir_all(&args.out)?;
+    let mut per_observable: BTreeMap<String, (f64, f64, usize)> = BTreeMap::new();
+    for r in rows {
+        if let (Some(res), Some(rel)) = (r.residual, r.relative_error) {
+            let e = per_observable
+                .entry(r.measurement.observable.clone())
+                .or_default();
+            e.0 += res * res;
+            e.1 += rel.abs();
+            e.2 += 1;
+        }
+    }
+    let summary: BTreeMap<String, serde_json::Value> = per_observable
+        .iter()
+        .map(|(k, (ss, rel, n))| {
+            (
+                k.clone(),
+                serde_json::json!({ "rmse": (ss / *n as f64).sqrt(), "mean_relative_error": rel / *n as f64, "n": n }),
+            )
+        })
+        .collect();
+    let json = serde_json::json!({
+        "model": args.model.display().to_string(),
+        "data": args.data.display().to_string(),
+        "coarse": args.coarse,
+        "replicates": args.replicates,
+        "rows": rows,
+        "observables": summary,
+    });
+    std::fs::write(
+        args.out.join("compare.json"),
+        serde_json::to_vec_pretty(&json)?,
+    )?;
+    let fmt =
+        |x: Option<f64>, p: usize| x.map(|v| format!("{v:.p$}")).unwrap_or_else(|| "-".into());
+    let mut md = String::from(
+        "| test | moisture % | firmness MPa | observable | measured | simulated | scatter | error |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    let mut csv = String::from(
+        "row,test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,measured,simulated_mean,simulated_scatter,relative_error,problems\n",
+    );
+    for r in rows {
+        let m = &r.measurement;
+        let c = |k: &str| {
+            m.conditions
+                .get(k)
+                .map(|v| format!("{v}"))
+                .unwrap_or_default()
+        };
+        md += &format!(
+            "| {} | {} | {} | {} | {} {} | {} | {} | {} |\n",
+            m.test,
+            c("moisture_pct"),
+            c("firmness_mpa"),
+            m.observable,
+            m.value,
+            m.unit,
+            fmt(r.simulated_mean, 2),
+            fmt(r.simulated_scatter, 2),
+            r.relative_error
+                .map(|e| format!("{:+.1} %", 100.0 * e))
+                .unwrap_or_else(|| { r.problems.first().cloned().unwrap_or_else(|| "-".into()) })
+        );
+        csv += &format!(
+            "{},{},{},{},{},{},{},{},{},{},{}\n",
+            m.row,
+            m.test,
+            c("moisture_pct"),
+            c("firmness_mpa"),
+            c("normal_pressure_pa"),
+            m.observable,
+            m.value,
+            fmt(r.simulated_mean, 4),
+            fmt(r.simulated_scatter, 4),
+            fmt(r.relative_error, 4),
+            r.problems.join("; ").replace(',', ";")
+        );
+    }
+    md += "\n";
+    for (k, v) in &summary {
+        md += &format!(
+            "{k}: RMSE {:.3}, mean relative error {:.1} % over {} conditions\n",
+            v["rmse"].as_f64().unwrap_or(f64::NAN),
+            100.0 * v["mean_relative_error"].as_f64().unwrap_or(f64::NAN),
+            v["n"]
+        );
+    }
+    std::fs::write(args.out.join("compare.md"), &md)?;
+    std::fs::write(args.out.join("compare.csv"), csv)?;
+    out.write_all(md.as_bytes())?;
+    writeln!(
+        out,
+        "\nwritten: {}/compare.{{json,csv,md}}",
+        args.out.display()
+    )?;
+    Ok(())
+}

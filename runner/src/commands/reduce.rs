@@ -1,0 +1,140 @@
+//! `tilth reduce repose|shear|ucs FILES... [--json] [--plot DIR]`: MCAP -> the study's numbers
+//! (the work is in `tilth_tools::reduce`).
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use tilth_tools::reduce::{self, ReadOptions};
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Observable {
+    /// Repose angle by the study's method (silhouette halves, line fits), with a cone fit.
+    Repose,
+    /// Peak shear force and the force-displacement curve; Mohr-Coulomb over several files.
+    Shear,
+    /// Unconfined compressive strength with the corrected area.
+    Ucs,
+}
+
+#[derive(Debug, Args)]
+pub struct ReduceArgs {
+    pub what: Observable,
+    /// run.mcap files (a `.partial` file is read up to its last complete chunk and marked
+    /// incomplete).
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// One JSON object per file (and the Mohr-Coulomb fit for several shear files).
+    #[arg(long)]
+    pub json: bool,
+    /// Write an SVG per file here (default: beside each file).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+fn svg_path(file: &Path, dir: Option<&PathBuf>, what: &str) -> PathBuf {
+    let stem = file
+        .parent()
+        .and_then(|p| p.file_name())
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    match dir {
+        Some(d) => d.join(format!("{what}-{stem}.svg")),
+        None => file.with_file_name(format!("{what}.svg")),
+    }
+}
+
+pub fn reduce_cmd(args: &ReduceArgs, out: &mut dyn Write) -> Result<()> {
+    if let Some(d) = &args.plot {
+        std::fs::create_dir_all(d).with_context(|| format!("{}: cannot create", d.display()))?;
+    }
+    let mut results = vec![];
+    let mut shears = vec![];
+    for file in &args.files {
+        let run = reduce::read_run(file, &ReadOptions::default())?;
+        let (value, svg, line) = match args.what {
+            Observable::Repose => {
+                let r = reduce::repose(&run, &Default::default())?;
+                let line = format!(
+                    "repose angle {:.2} deg (halves {}; cone fit {:.2} deg, R^2 {:.3})",
+                    r.analysis.repose_angle_deg,
+                    r.analysis
+                        .views
+                        .iter()
+                        .flat_map(|v| [v.left.angle_deg, v.right.angle_deg])
+                        .map(|a| format!("{a:.2}"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    r.analysis.cone.angle_deg,
+                    r.analysis.cone.r_squared
+                );
+                (
+                    serde_json::to_value(&r)?,
+                    reduce::plot::repose_svg(&r)?,
+                    line,
+                )
+            }
+            Observable::Shear => {
+                let r = reduce::shear(&run, &Default::default())?;
+                let line = format!(
+                    "peak shear force {:.2} N at {:.2} mm",
+                    r.analysis.peak_shear_force_n,
+                    r.analysis.displacement_at_peak_m * 1e3
+                );
+                let svg = reduce::plot::shear_svg(&r)?;
+                let v = serde_json::to_value(&r)?;
+                shears.push(r);
+                (v, svg, line)
+            }
+            Observable::Ucs => {
+                let r = reduce::ucs(&run, &Default::default())?;
+                let line = format!(
+                    "UCS {:.2} kPa ({:?} at strain {:.3})",
+                    r.analysis.ucs_kpa, r.analysis.failure, r.analysis.strain_at_failure
+                );
+                (serde_json::to_value(&r)?, reduce::plot::ucs_svg(&r)?, line)
+            }
+        };
+        let what = format!("{:?}", args.what).to_lowercase();
+        let svg_file = svg_path(file, args.plot.as_ref(), &what);
+        std::fs::write(&svg_file, svg)
+            .with_context(|| format!("{}: cannot write", svg_file.display()))?;
+        let complete = run.completeness.complete;
+        if !args.json {
+            let flag = if complete { "" } else { "  [INCOMPLETE FILE]" };
+            writeln!(
+                out,
+                "{}: {line}{flag}; plot {}",
+                file.display(),
+                svg_file.display()
+            )?;
+        }
+        results.push(value);
+    }
+    let fit = if shears.len() >= 2 {
+        let fit = reduce::mohr_coulomb(&shears)?;
+        if !args.json {
+            writeln!(
+                out,
+                "Mohr-Coulomb over {} files: cohesion {:.2} kPa, friction angle {:.2} deg (R^2 {:.3})",
+                shears.len(),
+                fit.cohesion_pa / 1e3,
+                fit.friction_angle_deg,
+                fit.r_squared
+            )?;
+        }
+        Some(fit)
+    } else {
+        None
+    };
+    if args.json {
+        let v = match fit {
+            Some(f) => serde_json::json!({ "runs": results, "mohr_coulomb": f }),
+            None if results.len() == 1 => results.remove(0),
+            None => serde_json::Value::Array(results),
+        };
+        serde_json::to_writer_pretty(&mut *out, &v)?;
+        writeln!(out)?;
+    }
+    Ok(())
+}

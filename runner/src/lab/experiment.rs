@@ -1,0 +1,289 @@
+//! Experiment files (`sweeps/experiments/*.toml`): a virtual lab test at given conditions.
+//!
+//! ```toml
+//! format_version = 1
+//! experiment = "repose"                 # repose | direct_shear | ucs
+//! model = "../../models/li2022.toml"    # conditions -> materials and contact parameters
+//! [conditions]
+//! moisture_pct = 6
+//! [simulation]                          # all optional
+//! seed = 1
+//! [repose]                              # the test's own parameters, all with defaults
+//! drop_height = 0.03
+//! ```
+//!
+//! The experiment builds a scene (walls, factory, materials and contact from the model) that
+//! goes through the same checks as a scene file, plus a [`Protocol`] that runs its phases.
+//! `coarse = true` (or `tilth run --coarse`) switches to each test's coarse preset, which
+//! finishes in under a minute for tests and smoke runs.
+
+use super::model::{Conditions, Model};
+use super::protocol::Protocol;
+use super::{repose, shear, ucs};
+use crate::config;
+use crate::sweep::target;
+use anyhow::{Context, Result, anyhow, bail};
+use serde::Deserialize;
+use std::path::Path;
+use toml::Value;
+
+/// An experiment file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentFile {
+    pub format_version: i64,
+    /// `repose`, `direct_shear` or `ucs`.
+    pub experiment: String,
+    /// Model file, relative to this file.
+    pub model: String,
+    #[serde(default)]
+    pub conditions: Conditions,
+    /// Use the test's coarse preset (bigger particles, less material).
+    #[serde(default)]
+    pub coarse: bool,
+    #[serde(default)]
+    pub simulation: SimulationSettings,
+    pub repose: Option<repose::ReposeParams>,
+    pub direct_shear: Option<shear::ShearParams>,
+    pub ucs: Option<ucs::UcsParams>,
+}
+
+/// `[simulation]` of an experiment.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSettings {
+    /// Time step, s (default: `dt_fraction` of the Rayleigh time of the particles).
+    pub dt: Option<f64>,
+    /// Fraction of the Rayleigh time used when `dt` is not given (EDEM practice 0.2-0.4).
+    #[serde(default = "default_dt_fraction")]
+    pub dt_fraction: f64,
+    #[serde(default = "one_u64")]
+    pub seed: u64,
+    #[serde(default = "one_usize")]
+    pub threads: usize,
+}
+
+fn default_dt_fraction() -> f64 {
+    0.35
+}
+fn one_u64() -> u64 {
+    1
+}
+fn one_usize() -> usize {
+    1
+}
+
+impl Default for SimulationSettings {
+    fn default() -> Self {
+        SimulationSettings {
+            dt: None,
+            dt_fraction: default_dt_fraction(),
+            seed: 1,
+            threads: 1,
+        }
+    }
+}
+
+/// What a test needs from the common part of the file.
+pub struct Common<'a> {
+    pub model: &'a Model,
+    pub conditions: &'a Conditions,
+    pub sim: &'a SimulationSettings,
+    pub coarse: bool,
+}
+
+/// A built experiment: the scene (TOML, checked like any scene) and its protocol.
+pub struct Built {
+    pub scene: Value,
+    pub protocol: Box<dyn Protocol>,
+}
+
+/// Which tests exist.
+pub const KINDS: [&str; 3] = ["repose", "direct_shear", "ucs"];
+
+/// Whether a TOML document is an experiment file (it has `experiment = "..."`).
+pub fn is_experiment(v: &Value) -> bool {
+    v.get("experiment").is_some()
+}
+
+/// Builds the experiment in `value` (read from `origin`, relative paths from `dir`); scene
+/// overrides (`scene:` factor targets) are applied to the generated scene.
+pub fn build(
+    value: Value,
+    origin: &str,
+    dir: &Path,
+    scene_overrides: &[(String, Value)],
+) -> Result<Built> {
+    let file: ExperimentFile = value
+        .try_into()
+        .map_err(|e: toml::de::Error| anyhow!("{origin}: {}", one_line(&e)))?;
+    if file.format_version != 1 {
+        bail!(
+            "{origin}: format_version = {} is not supported; this tilth reads experiment format_version = 1",
+            file.format_version
+        );
+    }
+    let model = Model::load(&dir.join(&file.model))
+        .with_context(|| format!("{origin}: model = \"{}\"", file.model))?;
+    let s = &file.simulation;
+    if !(s.dt_fraction > 0.0 && s.dt_fraction <= 1.0) {
+        bail!(
+            "{origin}: simulation.dt_fraction = {} is out of range: allowed (0, 1]",
+            s.dt_fraction
+        );
+    }
+    if s.threads == 0 {
+        bail!("{origin}: simulation.threads = 0 is out of range: allowed [1, cores]");
+    }
+    let common = Common {
+        model: &model,
+        conditions: &file.conditions,
+        sim: &file.simulation,
+        coarse: file.coarse,
+    };
+    let wrong = |name: &str| -> anyhow::Error {
+        anyhow!(
+            "{origin}: [{name}] is for experiment = \"{name}\"; this file is \"{}\"",
+            file.experiment
+        )
+    };
+    let mut built = match file.experiment.as_str() {
+        "repose" => {
+            if file.direct_shear.is_some() {
+                return Err(wrong("direct_shear"));
+            }
+            if file.ucs.is_some() {
+                return Err(wrong("ucs"));
+            }
+            repose::build(&common, &file.repose.clone().unwrap_or_default())
+        }
+        "direct_shear" => {
+            if file.repose.is_some() {
+                return Err(wrong("repose"));
+            }
+            if file.ucs.is_some() {
+                return Err(wrong("ucs"));
+            }
+            shear::build(&common, &file.direct_shear.clone().unwrap_or_default())
+        }
+        "ucs" => {
+            if file.repose.is_some() {
+                return Err(wrong("repose"));
+            }
+            if file.direct_shear.is_some() {
+                return Err(wrong("direct_shear"));
+            }
+            ucs::build(&common, &file.ucs.clone().unwrap_or_default())
+        }
+        other => bail!(
+            "{origin}: experiment = \"{other}\" is unknown: allowed {}",
+            KINDS.join(", ")
+        ),
+    }
+    .with_context(|| origin.to_string())?;
+    for (path, v) in scene_overrides {
+        target::set(&mut built.scene, path, v.clone())
+            .with_context(|| format!("{origin}: scene:{path}"))?;
+    }
+    Ok(built)
+}
+
+fn one_line(e: &toml::de::Error) -> String {
+    e.message().split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Prepares the scene of a built experiment like any scene file.
+pub fn prepare(
+    built: &Built,
+    origin: &str,
+    dir: &Path,
+    threads: Option<usize>,
+) -> Result<config::Prepared> {
+    config::prepare_value(built.scene.clone(), origin, dir, threads)
+}
+
+/// The Rayleigh time (s) of a particle of diameter `d` of the model's material `soil`.
+pub fn rayleigh_time(model: &Model, d: f64) -> Result<f64> {
+    let soil = model
+        .file
+        .materials
+        .get("soil")
+        .and_then(Value::as_table)
+        .ok_or_else(|| {
+            anyhow!(
+                "{}: the model needs a material `soil`",
+                model.path.display()
+            )
+        })?;
+    let num = |k: &str| {
+        soil.get(k)
+            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+    };
+    let nu = num("poisson_ratio").unwrap_or(0.2);
+    let rho = num("density").ok_or_else(|| anyhow!("materials.soil.density is missing"))?;
+    let g = match (num("shear_modulus"), num("youngs_modulus")) {
+        (Some(g), _) => g,
+        (None, Some(e)) => e / (2.0 * (1.0 + nu)),
+        _ => bail!("materials.soil needs youngs_modulus or shear_modulus"),
+    };
+    Ok(std::f64::consts::PI * 0.5 * d * (rho / g).sqrt() / (0.1631 * nu + 0.8766))
+}
+
+/// Young's modulus of the model's soil, Pa.
+pub fn soil_modulus(model: &Model) -> Result<f64> {
+    let soil = model.file.materials.get("soil").and_then(Value::as_table);
+    let num = |k: &str| {
+        soil.and_then(|s| s.get(k))
+            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+    };
+    match (num("youngs_modulus"), num("shear_modulus")) {
+        (Some(e), _) => Ok(e),
+        (None, Some(g)) => Ok(2.0 * g * (1.0 + num("poisson_ratio").unwrap_or(0.2))),
+        _ => bail!(
+            "{}: materials.soil needs youngs_modulus or shear_modulus",
+            model.path.display()
+        ),
+    }
+}
+
+/// Density of the model's soil, kg/m^3.
+pub fn soil_density(model: &Model) -> Result<f64> {
+    model
+        .file
+        .materials
+        .get("soil")
+        .and_then(|m| m.get("density"))
+        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+        .ok_or_else(|| {
+            anyhow!(
+                "{}: materials.soil.density is missing",
+                model.path.display()
+            )
+        })
+}
+
+/// Helpers to write scene TOML in code.
+pub mod scene {
+    use toml::{Table, Value};
+
+    pub fn f(x: f64) -> Value {
+        Value::Float(x)
+    }
+
+    pub fn v3(a: [f64; 3]) -> Value {
+        Value::Array(a.iter().map(|&x| Value::Float(x)).collect())
+    }
+
+    pub fn s(x: &str) -> Value {
+        Value::String(x.to_string())
+    }
+
+    /// A table from (key, value) pairs.
+    pub fn t(entries: &[(&str, Value)]) -> Value {
+        let mut out = Table::new();
+        for (k, v) in entries {
+            out.insert(k.to_string(), v.clone());
+        }
+        Value::Table(out)
+    }
+}

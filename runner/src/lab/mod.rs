@@ -1,0 +1,12 @@
+//! The virtual laboratory: the reference study's three tests as experiments.
+//!
+//! [`model`] maps test conditions to contact parameters; [`experiment`] reads an experiment
+//! file and builds its scene and [`protocol`]; [`repose`], [`shear`] and [`ucs`] are the tests.
+
+pub mod experiment;
+pub mod model;
+pub mod protocol;
+pub mod repose;
+pub mod shear;
+pub mod specimen;
+pub mod ucs;

@@ -1,0 +1,285 @@
+//! Model files: test conditions (moisture, firmness, ...) -> materials and contact parameters.
+//!
+//! ```toml
+//! format_version = 1
+//! name = "li2022"
+//! conditions = { moisture_pct = [3, 12], firmness_mpa = [0.34, 2.76] }   # allowed ranges
+//! [materials.soil]
+//! youngs_modulus = 13.5e6
+//! [contact]
+//! normal = "jkr"
+//! [pairs.soil-soil]
+//! restitution = 0.45                                                          # a constant
+//! rolling_friction = { interpolate = "moisture_pct", x = [3, 6], y = [0.19, 0.15] }
+//! surface_energy = { polynomial = "moisture_pct", coefficients = [0.35, 0.001] }
+//! shear_stiffness_per_area = { cases = [
+//!   { when = { moisture_pct = 6 }, value = { interpolate = "firmness_mpa", x = [...], y = [...] } },
+//!   { when = { firmness_mpa = 1.55 }, value = { interpolate = "moisture_pct", ... } } ] }
+//! ```
+//!
+//! A value is a number, a linear interpolation in one condition (no extrapolation: a
+//! condition outside the table is refused with the table's range), a polynomial
+//! c0 + c1 x + c2 x^2 + ... in one condition, or `cases`: the first case whose `when`
+//! conditions all equal the given ones. Materials and the contact section pass through to the
+//! scene unchanged.
+
+use anyhow::{Context, Result, anyhow, bail};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use toml::Value;
+
+/// A model file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    pub format_version: i64,
+    pub name: String,
+    pub description: Option<String>,
+    /// Condition name -> [min, max] allowed.
+    pub conditions: BTreeMap<String, [f64; 2]>,
+    /// Scene `[materials]`, passed through.
+    pub materials: toml::Table,
+    /// Scene `[contact]`, passed through.
+    pub contact: toml::Table,
+    /// "a-b" -> parameter -> value form.
+    pub pairs: BTreeMap<String, BTreeMap<String, Value>>,
+    /// Bonds, used only by experiments that form them (direct shear, UCS).
+    pub bond: Option<BondModel>,
+}
+
+/// `[bond]`: the bond law and its parameters per material pair.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BondModel {
+    /// The law for the contact model's `bond` slot (e.g. "bond").
+    pub law: String,
+    /// "a-b" -> parameter -> value form.
+    pub pairs: BTreeMap<String, BTreeMap<String, Value>>,
+}
+
+/// A model file with where it came from.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub file: ModelFile,
+    pub path: PathBuf,
+}
+
+/// Test conditions: name -> value.
+pub type Conditions = BTreeMap<String, f64>;
+
+impl Model {
+    pub fn load(path: &Path) -> Result<Model> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let file: ModelFile = toml::from_str(&text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| text[..s.start].matches('\n').count() + 1)
+                .map(|l| format!(":{l}"))
+                .unwrap_or_default();
+            anyhow!("{}{line}: {}", path.display(), e.message())
+        })?;
+        if file.format_version != 1 {
+            bail!(
+                "{}: format_version = {} is not supported; this tilth reads model format_version = 1",
+                path.display(),
+                file.format_version
+            );
+        }
+        Ok(Model {
+            file,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Checks the given conditions against the model's declared ones and their ranges
+    /// (a condition an experiment does not need may be left out).
+    pub fn check_conditions(&self, conds: &Conditions) -> Result<()> {
+        let p = self.path.display();
+        for (name, v) in conds {
+            let [lo, hi] = self.file.conditions.get(name).ok_or_else(|| {
+                let known: Vec<&str> = self.file.conditions.keys().map(String::as_str).collect();
+                anyhow!(
+                    "{p}: unknown condition `{name}`; the model's conditions are {}",
+                    known.join(", ")
+                )
+            })?;
+            if !(lo..=hi).contains(&v) {
+                bail!("{p}: condition {name} = {v} is out of range: allowed [{lo}, {hi}]");
+            }
+        }
+        Ok(())
+    }
+
+    /// The scene fragments (`materials`, `contact`, `pairs`) at `conds`, with the bond law
+    /// and its parameters when `bonds`.
+    pub fn scene_parts(&self, conds: &Conditions, bonds: bool) -> Result<(Value, Value, Value)> {
+        self.check_conditions(conds)?;
+        let path = self.path.display();
+        let mut by_pair: BTreeMap<String, toml::Table> = BTreeMap::new();
+        let mut add =
+            |section: &str, pairs: &BTreeMap<String, BTreeMap<String, Value>>| -> Result<()> {
+                for (pair, params) in pairs {
+                    let t = by_pair.entry(pair.clone()).or_default();
+                    for (key, form) in params {
+                        let v = evaluate(form, conds)
+                            .map_err(|e| anyhow!("{path}: {section}.{pair}.{key}: {e}"))?;
+                        t.insert(key.clone(), Value::Float(v));
+                    }
+                }
+                Ok(())
+            };
+        add("pairs", &self.file.pairs)?;
+        let mut contact = self.file.contact.clone();
+        if bonds {
+            let b = self.file.bond.as_ref().ok_or_else(|| {
+                anyhow!("{path}: this experiment forms bonds, but the model has no [bond] section")
+            })?;
+            add("bond.pairs", &b.pairs)?;
+            // The bond law goes with the additive laws (`extra`); the kernel gives it its slot.
+            let extra = contact
+                .entry("extra")
+                .or_insert_with(|| Value::Array(vec![]));
+            if let Value::Array(list) = extra {
+                list.push(Value::String(b.law.clone()));
+            }
+        }
+        let mut pairs = vec![];
+        for (pair, mut t) in by_pair {
+            let (a, b) = pair.split_once('-').ok_or_else(|| {
+                anyhow!("{path}: [pairs.{pair}]: name a pair as material-material")
+            })?;
+            t.insert(
+                "materials".into(),
+                Value::Array(vec![Value::String(a.into()), Value::String(b.into())]),
+            );
+            pairs.push(Value::Table(t));
+        }
+        Ok((
+            Value::Table(self.file.materials.clone()),
+            Value::Table(contact),
+            Value::Array(pairs),
+        ))
+    }
+}
+
+fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Float(x) => Some(*x),
+        Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+fn numbers(v: Option<&Value>, key: &str) -> Result<Vec<f64>> {
+    let list = v
+        .and_then(Value::as_array)
+        .ok_or_else(|| anyhow!("`{key}` must be a list of numbers"))?;
+    list.iter()
+        .map(|x| number(x).ok_or_else(|| anyhow!("`{key}` must be a list of numbers")))
+        .collect()
+}
+
+fn condition<'a>(t: &toml::Table, key: &str, conds: &'a Conditions) -> Result<(&'a str, f64)> {
+    let name = t
+        .get(key)
+        .and_then(Value::as_str)
+        .ok_or_else(|| anyhow!("`{key}` must name a condition"))?;
+    conds
+        .get_key_value(name)
+        .map(|(k, v)| (k.as_str(), *v))
+        .ok_or_else(|| anyhow!("condition `{name}` is not given"))
+}
+
+/// The value of one parameter form at `conds`.
+pub fn evaluate(form: &Value, conds: &Conditions) -> Result<f64> {
+    if let Some(x) = number(form) {
+        return Ok(x);
+    }
+    let t = form.as_table().ok_or_else(|| {
+        anyhow!("a value is a number or a table (interpolate, polynomial, cases)")
+    })?;
+    if t.contains_key("interpolate") {
+        let (name, c) = condition(t, "interpolate", conds)?;
+        let x = numbers(t.get("x"), "x")?;
+        let y = numbers(t.get("y"), "y")?;
+        if x.len() != y.len() || x.is_empty() || x.windows(2).any(|w| w[0] >= w[1]) {
+            bail!("x and y must have the same length and x must increase");
+        }
+        let (lo, hi) = (x[0], x[x.len() - 1]);
+        if c < lo || c > hi {
+            bail!("{name} = {c} is outside the table: allowed [{lo}, {hi}]");
+        }
+        let k = x.iter().position(|&xi| xi >= c).unwrap_or(x.len() - 1);
+        if k == 0 || x[k] == c {
+            return Ok(y[k]);
+        }
+        let f = (c - x[k - 1]) / (x[k] - x[k - 1]);
+        return Ok(y[k - 1] + f * (y[k] - y[k - 1]));
+    }
+    if t.contains_key("polynomial") {
+        let (_, c) = condition(t, "polynomial", conds)?;
+        let coef = numbers(t.get("coefficients"), "coefficients")?;
+        return Ok(coef.iter().rev().fold(0.0, |acc, k| acc * c + k));
+    }
+    if let Some(cases) = t.get("cases").and_then(Value::as_array) {
+        for case in cases {
+            let when = case
+                .get("when")
+                .and_then(Value::as_table)
+                .ok_or_else(|| anyhow!("each case needs `when = {{ condition = value }}`"))?;
+            let hit = when.iter().all(|(k, v)| {
+                number(v).is_some_and(|v| conds.get(k).is_some_and(|c| (c - v).abs() < 1e-9))
+            });
+            if hit {
+                let value = case
+                    .get("value")
+                    .ok_or_else(|| anyhow!("a case needs `value`"))?;
+                return evaluate(value, conds);
+            }
+        }
+        let given: Vec<String> = conds.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        bail!("no case matches {}", given.join(", "));
+    }
+    bail!("unknown value form: use a number, {{ interpolate }}, {{ polynomial }} or {{ cases }}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn conds(m: f64, f: f64) -> Conditions {
+        [
+            ("moisture_pct".to_string(), m),
+            ("firmness_mpa".to_string(), f),
+        ]
+        .into()
+    }
+
+    #[test]
+    fn forms_evaluate_by_their_formulas() {
+        let v: Value = toml::from_str(
+            "a = { interpolate = \"moisture_pct\", x = [3, 6, 9], y = [1.0, 2.0, 4.0] }\n\
+             b = { polynomial = \"firmness_mpa\", coefficients = [1.0, 2.0, 3.0] }\n\
+             c = { cases = [ { when = { moisture_pct = 6 }, value = 7.0 }, { when = { firmness_mpa = 1.55 }, value = { interpolate = \"moisture_pct\", x = [3, 12], y = [0.0, 9.0] } } ] }",
+        )
+        .unwrap();
+        assert_eq!(evaluate(&v["a"], &conds(4.5, 1.0)).unwrap(), 1.5);
+        assert_eq!(evaluate(&v["a"], &conds(9.0, 1.0)).unwrap(), 4.0);
+        assert_eq!(
+            evaluate(&v["b"], &conds(3.0, 2.0)).unwrap(),
+            1.0 + 4.0 + 12.0
+        );
+        assert_eq!(evaluate(&v["c"], &conds(6.0, 0.34)).unwrap(), 7.0);
+        assert_eq!(evaluate(&v["c"], &conds(9.0, 1.55)).unwrap(), 6.0);
+        let e = evaluate(&v["a"], &conds(12.0, 1.0))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("allowed [3, 9]"), "{e}");
+        let e = evaluate(&v["c"], &conds(9.0, 0.34))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no case matches"), "{e}");
+    }
+}

@@ -1,0 +1,433 @@
+//! `repose`: the funnel repose-angle test (FT-104B tester; experiments.md).
+//!
+//! A steel funnel (inlet 135 mm, outlet 20 mm, 140 mm high) stands coaxially above a steel
+//! tray (a ring knife of 61.8 mm diameter and 20 mm height) on a steel floor. Soil particles
+//! are generated in the funnel's upper part at `rate` until `mass_g` is in, flow out, and
+//! heap on the tray; what overflows lands on the floor. The run ends when the heap is at rest:
+//! mean particle speed below `rest_speed` and the heap's cone angle steady to `rest_angle`
+//! degrees over `rest_time` seconds (not after a fixed time), or at `max_time` with a warning.
+
+use super::experiment::{Built, Common, rayleigh_time, scene::*, soil_density};
+use super::protocol::{Control, Protocol};
+use crate::sweep::observe::{self, Tray};
+use anyhow::{Result, bail};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use tilth_kernel::sim::Simulation;
+use toml::Value;
+
+/// `[repose]`: the test's parameters (SI units).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReposeParams {
+    /// Soil poured, g (the study: 200 g). Coarse preset: 40 g.
+    pub mass_g: Option<f64>,
+    /// Particle diameter, m (the study: 2 mm). Coarse preset: 4 mm.
+    pub diameter: Option<f64>,
+    /// Height of the funnel outlet above the tray, m. The study does not give it; 30 mm
+    /// leaves room above a 35 degree heap on the tray (22 mm high) so that the heap is not
+    /// cut by the outlet.
+    #[serde(default = "default_drop")]
+    pub drop_height: f64,
+    /// Particles generated per second (the study: 20,000).
+    #[serde(default = "default_rate")]
+    pub rate: f64,
+    #[serde(default = "default_inlet")]
+    pub funnel_inlet_diameter: f64,
+    /// Funnel outlet, m (20 mm = 10 particle diameters of 2 mm). Coarse preset: 10 of its
+    /// particle diameters (40 mm), so that the outlet passes as many particles across.
+    pub funnel_outlet_diameter: Option<f64>,
+    #[serde(default = "default_funnel_height")]
+    pub funnel_height: f64,
+    #[serde(default = "default_tray_diameter")]
+    pub tray_diameter: f64,
+    #[serde(default = "default_tray_height")]
+    pub tray_height: f64,
+    /// At rest: mean particle speed below this, m/s.
+    #[serde(default = "default_rest_speed")]
+    pub rest_speed: f64,
+    /// At rest: the cone angle moved less than this, degrees, over `rest_time`.
+    #[serde(default = "default_rest_angle")]
+    pub rest_angle: f64,
+    /// s.
+    #[serde(default = "default_rest_time")]
+    pub rest_time: f64,
+    /// Stop here even if not at rest (with a warning), s.
+    #[serde(default = "default_max_time")]
+    pub max_time: f64,
+}
+
+fn default_drop() -> f64 {
+    0.03
+}
+fn default_rate() -> f64 {
+    20_000.0
+}
+fn default_inlet() -> f64 {
+    0.135
+}
+fn default_funnel_height() -> f64 {
+    0.140
+}
+fn default_tray_diameter() -> f64 {
+    0.0618
+}
+fn default_tray_height() -> f64 {
+    0.020
+}
+fn default_rest_speed() -> f64 {
+    0.005
+}
+fn default_rest_angle() -> f64 {
+    0.2
+}
+fn default_rest_time() -> f64 {
+    0.2
+}
+fn default_max_time() -> f64 {
+    8.0
+}
+
+impl Default for ReposeParams {
+    fn default() -> Self {
+        toml::from_str("").expect("defaults")
+    }
+}
+
+fn positive(key: &str, v: f64, unit: &str) -> Result<f64> {
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        bail!("repose.{key} = {v} is out of range: allowed (0, inf) {unit}")
+    }
+}
+
+/// The scene and protocol of a repose test.
+pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
+    let d = positive(
+        "diameter",
+        p.diameter.unwrap_or(if c.coarse { 0.004 } else { 0.002 }),
+        "m",
+    )?;
+    let mass = positive(
+        "mass_g",
+        p.mass_g.unwrap_or(if c.coarse { 40.0 } else { 200.0 }),
+        "g",
+    )?;
+    for (k, v) in [
+        ("drop_height", p.drop_height),
+        ("rate", p.rate),
+        ("funnel_inlet_diameter", p.funnel_inlet_diameter),
+        ("funnel_height", p.funnel_height),
+        ("tray_diameter", p.tray_diameter),
+        ("tray_height", p.tray_height),
+        ("rest_speed", p.rest_speed),
+        ("rest_angle", p.rest_angle),
+        ("rest_time", p.rest_time),
+        ("max_time", p.max_time),
+    ] {
+        positive(k, v, "")?;
+    }
+    let outlet = p
+        .funnel_outlet_diameter
+        .unwrap_or(if c.coarse { 10.0 * d } else { 0.020 });
+    positive("funnel_outlet_diameter", outlet, "m")?;
+    if outlet < 3.0 * d {
+        bail!(
+            "repose.funnel_outlet_diameter = {} m is less than 3 particle diameters ({} m): the funnel would jam",
+            outlet,
+            3.0 * d
+        );
+    }
+    if p.funnel_inlet_diameter <= outlet {
+        bail!("repose.funnel_inlet_diameter must be larger than funnel_outlet_diameter");
+    }
+    let rho = soil_density(c.model)?;
+    let count = (mass * 1e-3 / (rho * std::f64::consts::PI * d.powi(3) / 6.0)).round() as i64;
+    if count < 1 {
+        bail!("repose.mass_g = {mass} g is less than one particle");
+    }
+    let dt = match c.sim.dt {
+        Some(dt) => dt,
+        None => c.sim.dt_fraction * rayleigh_time(c.model, d)?,
+    };
+    let (materials, contact, pairs) = c.model.scene_parts(c.conditions, false)?;
+    let tray_r = 0.5 * p.tray_diameter;
+    let z_tray = p.tray_height;
+    let z_out = z_tray + p.drop_height;
+    let (r_out, r_in) = (0.5 * outlet, 0.5 * p.funnel_inlet_diameter);
+    let z_top = z_out + p.funnel_height;
+    // Particles appear in the funnel's upper 40 %, inside its wall with one diameter to spare.
+    let z_fill = z_out + 0.6 * p.funnel_height;
+    let r_fill = r_out + (r_in - r_out) * 0.6 - d;
+    let half = r_in.max(0.15) + 0.05;
+    let scene = t(&[
+        ("format_version", Value::Integer(1)),
+        (
+            "simulation",
+            t(&[
+                ("dt", f(dt)),
+                ("duration", f(p.max_time)),
+                ("seed", Value::Integer(c.sim.seed as i64)),
+                ("threads", Value::Integer(c.sim.threads as i64)),
+                (
+                    "domain",
+                    t(&[
+                        ("min", v3([-half, -half, -0.005])),
+                        ("max", v3([half, half, z_top + 0.05])),
+                    ]),
+                ),
+            ]),
+        ),
+        ("materials", materials),
+        ("contact", contact),
+        ("pairs", pairs),
+        (
+            "walls",
+            Value::Array(vec![
+                t(&[
+                    ("name", s("funnel")),
+                    ("type", s("cone")),
+                    ("base", v3([0.0, 0.0, z_out])),
+                    ("axis", v3([0.0, 0.0, 1.0])),
+                    ("radius_base", f(r_out)),
+                    ("radius_top", f(r_in)),
+                    ("length", f(p.funnel_height)),
+                    ("material", s("steel")),
+                ]),
+                t(&[
+                    ("name", s("tray")),
+                    ("type", s("disc")),
+                    ("centre", v3([0.0, 0.0, z_tray])),
+                    ("axis", v3([0.0, 0.0, 1.0])),
+                    ("radius", f(tray_r)),
+                    ("material", s("steel")),
+                ]),
+                t(&[
+                    ("name", s("tray_side")),
+                    ("type", s("cylinder")),
+                    ("base", v3([0.0, 0.0, 0.0])),
+                    ("axis", v3([0.0, 0.0, 1.0])),
+                    ("radius", f(tray_r)),
+                    ("length", f(z_tray)),
+                    ("material", s("steel")),
+                ]),
+                // Keeps what rolls off the tray on the floor.
+                t(&[
+                    ("name", s("fence")),
+                    ("type", s("cylinder")),
+                    ("base", v3([0.0, 0.0, 0.0])),
+                    ("axis", v3([0.0, 0.0, 1.0])),
+                    ("radius", f(half - 0.02)),
+                    ("length", f(0.05)),
+                    ("material", s("steel")),
+                ]),
+                t(&[
+                    ("name", s("floor")),
+                    ("type", s("plane")),
+                    ("point", v3([0.0, 0.0, 0.0])),
+                    ("normal", v3([0.0, 0.0, 1.0])),
+                    ("material", s("steel")),
+                ]),
+            ]),
+        ),
+        (
+            "factories",
+            Value::Array(vec![t(&[
+                (
+                    "region",
+                    t(&[
+                        ("type", s("cylinder")),
+                        ("base", v3([0.0, 0.0, z_fill])),
+                        ("radius", f(r_fill)),
+                        ("height", f(z_top - z_fill - d)),
+                    ]),
+                ),
+                ("material", s("soil")),
+                ("count", Value::Integer(count)),
+                ("rate", f(p.rate)),
+                ("velocity", v3([0.0, 0.0, -0.2])),
+                (
+                    "sizes",
+                    Value::Array(vec![t(&[("diameter", f(d)), ("fraction", f(1.0))])]),
+                ),
+            ])]),
+        ),
+    ]);
+    let tray = Tray {
+        centre: [0.0, 0.0, z_tray],
+        radius: tray_r,
+        ceiling: z_out,
+    };
+    Ok(Built {
+        scene,
+        protocol: Box::new(ReposeProtocol {
+            p: p.clone(),
+            tray,
+            count: count as usize,
+            fill_time: count as f64 / p.rate,
+            z_out,
+            outlet,
+            angles: vec![],
+            settled_at: None,
+            check_every: 0.02,
+            next_check: 0.0,
+            diameter: d,
+            mass_g: mass,
+        }),
+    })
+}
+
+/// Runs a repose test to rest.
+pub struct ReposeProtocol {
+    p: ReposeParams,
+    tray: Tray,
+    count: usize,
+    fill_time: f64,
+    z_out: f64,
+    /// Outlet diameter, m.
+    outlet: f64,
+    /// (time, cone angle) at each check.
+    angles: Vec<(f64, f64)>,
+    settled_at: Option<f64>,
+    check_every: f64,
+    next_check: f64,
+    diameter: f64,
+    mass_g: f64,
+}
+
+impl ReposeProtocol {
+    fn at_rest(&self, sim: &Simulation) -> bool {
+        let p = &sim.particles;
+        if p.len() < self.count || sim.time < self.fill_time {
+            return false;
+        }
+        // Particles left in the funnel at rest are residue, as in the real test.
+        let mean_speed = p.velocity.iter().map(|v| v.length()).sum::<f64>() / p.len() as f64;
+        if mean_speed > self.p.rest_speed {
+            return false;
+        }
+        let since = sim.time - self.p.rest_time;
+        let window: Vec<f64> = self
+            .angles
+            .iter()
+            .filter(|(t, _)| *t >= since)
+            .map(|(_, a)| *a)
+            .collect();
+        let spans_window = self.angles.iter().any(|(t, _)| *t <= since);
+        let lo = window.iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = window.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        spans_window && hi - lo < self.p.rest_angle
+    }
+}
+
+impl ReposeProtocol {
+    /// Fails when particles stay in the funnel, at rest, well after the pour: the outlet
+    /// arched over (cohesion, or particles too large for it).
+    fn check_jam(&self, sim: &Simulation) -> Result<()> {
+        if sim.time < self.fill_time + 0.5 || sim.particles.len() < self.count {
+            return Ok(());
+        }
+        let p = &sim.particles;
+        let stuck: Vec<usize> = (0..p.len())
+            .filter(|&k| p.position[k].z > self.z_out)
+            .collect();
+        if stuck.is_empty() {
+            return Ok(());
+        }
+        let speed = stuck.iter().map(|&k| p.velocity[k].length()).sum::<f64>() / stuck.len() as f64;
+        // A few grains stuck to the funnel wall are residue; a fifth of the soil is a jam.
+        if speed < self.p.rest_speed && stuck.len() * 5 > self.count {
+            bail!(
+                "the funnel jammed at t = {:.2} s (step {}): {} of {} particles are at rest above \
+                 the outlet (mean speed {:.1e} m/s). The outlet ({} m) is {:.1} particle diameters \
+                 wide; cohesion arches over narrow outlets: use smaller particles or a wider outlet",
+                sim.time,
+                sim.step,
+                stuck.len(),
+                p.len(),
+                speed,
+                self.outlet,
+                self.outlet / self.diameter
+            );
+        }
+        Ok(())
+    }
+}
+
+impl Protocol for ReposeProtocol {
+    fn control(&mut self, sim: &mut Simulation) -> Result<Control> {
+        if sim.time + 1e-12 >= self.next_check {
+            let h = observe::heap(sim, self.tray);
+            self.angles.push((sim.time, h.cone_angle_deg));
+            self.next_check = sim.time + self.check_every;
+            if self.at_rest(sim) {
+                self.settled_at = Some(sim.time);
+                return Ok(Control::Done);
+            }
+            self.check_jam(sim)?;
+        }
+        if sim.time >= self.p.max_time - 0.5 * sim.dt {
+            return Ok(Control::Done);
+        }
+        let steps = ((self.next_check - sim.time) / sim.dt).ceil().max(1.0) as u64;
+        Ok(Control::Step(steps))
+    }
+
+    fn scalars(&self, sim: &Simulation) -> Vec<(String, f64)> {
+        let h = observe::heap(sim, self.tray);
+        vec![
+            ("heap_cone_angle_deg".into(), h.cone_angle_deg),
+            ("heap_height".into(), h.height_m),
+            ("particles_on_tray".into(), h.particles_on_tray as f64),
+        ]
+    }
+
+    fn units(&self) -> Vec<(String, String)> {
+        vec![
+            ("heap_cone_angle_deg".into(), "degree".into()),
+            ("heap_height".into(), "m".into()),
+            ("particles_on_tray".into(), "count".into()),
+        ]
+    }
+
+    fn metadata(&self) -> BTreeMap<String, String> {
+        [
+            ("type", "repose".to_string()),
+            ("tray_radius_m", self.tray.radius.to_string()),
+            ("tray_top_z_m", self.tray.centre[2].to_string()),
+            ("tray_centre_x_m", "0".into()),
+            ("tray_centre_y_m", "0".into()),
+            ("drop_height_m", self.p.drop_height.to_string()),
+            ("particle_diameter_m", self.diameter.to_string()),
+            ("mass_g", self.mass_g.to_string()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    }
+
+    fn phase(&self) -> String {
+        "pouring and settling".into()
+    }
+
+    fn progress(&self, sim: &Simulation) -> f64 {
+        (sim.time / self.p.max_time).min(1.0)
+    }
+
+    fn summary(&self, sim: &Simulation) -> serde_json::Value {
+        let h = observe::heap(sim, self.tray);
+        serde_json::json!({
+            "settled": self.settled_at.is_some(),
+            "settled_at_s": self.settled_at,
+            "heap_cone_angle_deg": h.cone_angle_deg,
+            "heap_height_m": h.height_m,
+            "particles_on_tray": h.particles_on_tray,
+            "particles": sim.particles.len(),
+            "particles_left_in_funnel": sim.particles.position.iter().filter(|x| x.z > self.z_out).count(),
+            "warning": if self.settled_at.is_none() {
+                Some(format!("the heap was not at rest at max_time = {} s; raise repose.max_time", self.p.max_time))
+            } else { None },
+        })
+    }
+}

@@ -1,0 +1,397 @@
+//! `direct_shear`: the strain-controlled direct shear test (experiments.md).
+//!
+//! A steel split box: a lower ring (fixed, with a bottom) and an upper ring of the specimen's
+//! diameter (61.8 mm; area 3000 mm^2). Particles fill it loosely and settle; a platen
+//! compacts them with the study's 12 N, bonds form, the platen servo then holds the normal
+//! pressure, and the upper ring (with the platen riding on it) moves horizontally at
+//! `shear_speed` until `shear_displacement` (5 mm). The shear force is the force of the
+//! particles on the lower box along the shear direction. Loading is sped up only while the
+//! inertial number I = (v / h) d sqrt(rho / sigma_n) stays below `max_inertial_number`.
+
+use super::experiment::{Built, Common, scene::*, soil_density};
+use super::protocol::{Control, Protocol};
+use super::specimen::{self, Prep, Preparation};
+use anyhow::{Result, bail};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use tilth_kernel::DVec3;
+use tilth_kernel::sim::Simulation;
+use tilth_kernel::wall::Motion;
+use toml::Value;
+
+/// `[direct_shear]`: the test's parameters (SI units).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShearParams {
+    /// Inner diameter of the box, m (61.8 mm: 3000 mm^2).
+    #[serde(default = "default_box")]
+    pub box_diameter: f64,
+    /// Specimen height, m (20 mm); the particle count fills it at `packing`.
+    #[serde(default = "default_height")]
+    pub height: f64,
+    /// Particle diameter, m (2 mm; coarse preset 4 mm).
+    pub diameter: Option<f64>,
+    /// Solid fraction of the compacted specimen (sets the particle count).
+    #[serde(default = "default_packing")]
+    pub packing: f64,
+    /// Normal pressure during shear, Pa (table 12: 0.1 MPa).
+    #[serde(default = "default_pressure")]
+    pub normal_pressure: f64,
+    /// Compaction force before bonding, N (the study: 12 N).
+    #[serde(default = "default_compaction")]
+    pub compaction_force: f64,
+    /// Shear displacement, m (5 mm).
+    #[serde(default = "default_displacement")]
+    pub shear_displacement: f64,
+    /// Shear speed, m/s; default: the speed at half of `max_inertial_number`.
+    pub shear_speed: Option<f64>,
+    #[serde(default = "default_inertial")]
+    pub max_inertial_number: f64,
+    /// Longest any preparation phase may take, s.
+    #[serde(default = "default_phase_time")]
+    pub max_phase_time: f64,
+}
+
+fn default_box() -> f64 {
+    0.0618
+}
+fn default_height() -> f64 {
+    0.020
+}
+fn default_packing() -> f64 {
+    0.55
+}
+fn default_pressure() -> f64 {
+    1.0e5
+}
+fn default_compaction() -> f64 {
+    12.0
+}
+fn default_displacement() -> f64 {
+    0.005
+}
+fn default_inertial() -> f64 {
+    1.0e-3
+}
+fn default_phase_time() -> f64 {
+    2.0
+}
+
+impl Default for ShearParams {
+    fn default() -> Self {
+        toml::from_str("").expect("defaults")
+    }
+}
+
+const LOWER: usize = 0;
+const BOTTOM: usize = 1;
+const UPPER: usize = 2;
+const PLATEN: usize = 3;
+
+pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
+    let d = p.diameter.unwrap_or(if c.coarse { 0.004 } else { 0.002 });
+    specimen::check_fit("direct_shear", p.box_diameter, p.height, d)?;
+    for (k, v) in [
+        ("normal_pressure", p.normal_pressure),
+        ("compaction_force", p.compaction_force),
+        ("shear_displacement", p.shear_displacement),
+        ("max_inertial_number", p.max_inertial_number),
+        ("max_phase_time", p.max_phase_time),
+    ] {
+        if !(v > 0.0 && v.is_finite()) {
+            bail!("direct_shear.{k} = {v} is out of range: allowed (0, inf)");
+        }
+    }
+    if !(p.packing > 0.1 && p.packing < 0.74) {
+        bail!(
+            "direct_shear.packing = {} is out of range: allowed (0.1, 0.74)",
+            p.packing
+        );
+    }
+    let rho = soil_density(c.model)?;
+    let e = super::experiment::soil_modulus(c.model)?;
+    // Hertz overlaps grow as (p/E)^(2/3): at p = 2 % of E they pass 7 % of the radius, where
+    // the contact law stops being valid and the servo would chase a specimen it crushes.
+    if p.normal_pressure > 0.02 * e {
+        bail!(
+            "direct_shear.normal_pressure = {} Pa is beyond what the particles can carry: the servo cannot reach it with soil of E = {e:.3e} Pa (allowed up to 2 % of E, {:.3e} Pa)",
+            p.normal_pressure,
+            0.02 * e
+        );
+    }
+    let area = std::f64::consts::PI * p.box_diameter.powi(2) / 4.0;
+    let i_auto = |v: f64| specimen::inertial_number(v / p.height, d, rho, p.normal_pressure);
+    let speed = match p.shear_speed {
+        Some(v) if v > 0.0 && v.is_finite() => v,
+        Some(v) => bail!("direct_shear.shear_speed = {v} is out of range: allowed (0, inf) m/s"),
+        // I is linear in v: the speed at half the limit.
+        None => 0.5 * p.max_inertial_number / i_auto(1.0),
+    };
+    if i_auto(speed) > p.max_inertial_number {
+        bail!(
+            "direct_shear.shear_speed = {speed} m/s gives an inertial number of {:.2e}, above max_inertial_number = {:.1e}: the test would not be quasi-static",
+            i_auto(speed),
+            p.max_inertial_number
+        );
+    }
+    let r = 0.5 * p.box_diameter;
+    let (dt, count) = specimen::particles_for(c, d, area * p.height, p.packing)?;
+    let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
+    // Loose particles need about twice the specimen's height; the platen starts above that.
+    let z_mid = 0.5 * p.height;
+    let z_fill = 2.4 * p.height / (p.packing / 0.55);
+    let z_top = z_fill + 2.0 * d;
+    let duration = 4.0 * p.max_phase_time + p.shear_displacement / speed + 0.5;
+    let scene = t(&[
+        ("format_version", Value::Integer(1)),
+        (
+            "simulation",
+            specimen::simulation(c, dt, duration, r + 0.02, z_top + 0.02),
+        ),
+        ("materials", materials),
+        ("contact", contact),
+        ("pairs", pairs),
+        (
+            "walls",
+            Value::Array(vec![
+                specimen::ring("lower_box", 0.0, z_mid, r),
+                specimen::disc("bottom", 0.0, r),
+                specimen::ring("upper_box", z_mid, z_top, r),
+                specimen::disc("platen", z_top, r - 0.1 * d),
+            ]),
+        ),
+        (
+            "factories",
+            Value::Array(vec![specimen::fill(count, d, r - 0.6 * d, 0.6 * d, z_fill)]),
+        ),
+    ]);
+    Ok(Built {
+        scene,
+        protocol: Box::new(ShearProtocol {
+            prep: Preparation {
+                phase: Prep::Fill,
+                platen: PLATEN,
+                force: p.compaction_force,
+                count: count as usize,
+                started: 0.0,
+                in_band_since: None,
+                max_phase_time: p.max_phase_time,
+                platen_z: z_top,
+                diameter: d,
+            },
+            phase: Phase::Prepare,
+            p: p.clone(),
+            area,
+            speed,
+            d,
+            rho,
+            bonds: 0,
+            started: 0.0,
+            in_band_since: None,
+            x0: 0.0,
+            peak: (0.0, 0.0),
+            max_i: 0.0,
+        }),
+    })
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Prepare,
+    Load,
+    Shear,
+    Done,
+}
+
+struct ShearProtocol {
+    prep: Preparation,
+    phase: Phase,
+    p: ShearParams,
+    area: f64,
+    speed: f64,
+    d: f64,
+    rho: f64,
+    bonds: usize,
+    started: f64,
+    in_band_since: Option<f64>,
+    /// Upper box offset at the start of shearing, m.
+    x0: f64,
+    /// (displacement, force) at the peak so far.
+    peak: (f64, f64),
+    max_i: f64,
+}
+
+impl ShearProtocol {
+    fn displacement(&self, sim: &Simulation) -> f64 {
+        sim.walls[UPPER].offset.x - self.x0
+    }
+
+    fn shear_force(&self, sim: &Simulation) -> f64 {
+        sim.walls[LOWER].force.x + sim.walls[BOTTOM].force.x
+    }
+}
+
+impl Protocol for ShearProtocol {
+    fn control(&mut self, sim: &mut Simulation) -> Result<Control> {
+        let block = ((0.002 / sim.dt).ceil() as u64).max(1);
+        match self.phase {
+            Phase::Prepare => {
+                if self.prep.advance(sim, "direct_shear")? {
+                    self.bonds = sim.form_bonds();
+                    if self.bonds == 0 {
+                        bail!(
+                            "direct_shear: no bonds formed after compaction (step {}): the particles do not touch",
+                            sim.step
+                        );
+                    }
+                    let target = self.p.normal_pressure * self.area;
+                    sim.walls[PLATEN].motion = specimen::press(target, 0.05);
+                    self.phase = Phase::Load;
+                    self.started = sim.time;
+                }
+            }
+            Phase::Load => {
+                let target = self.p.normal_pressure * self.area;
+                let f = sim.walls[PLATEN].force.z;
+                let in_band = (f - target).abs() < 0.02 * target;
+                match (in_band, self.in_band_since) {
+                    (true, None) => self.in_band_since = Some(sim.time),
+                    (false, _) => self.in_band_since = None,
+                    _ => {}
+                }
+                if self.in_band_since.is_some_and(|t0| sim.time - t0 > 0.01) {
+                    self.phase = Phase::Shear;
+                    self.x0 = sim.walls[UPPER].offset.x;
+                    let v = DVec3::new(self.speed, 0.0, 0.0);
+                    sim.walls[UPPER].motion = Motion::Velocity(v);
+                    sim.walls[PLATEN].motion = Motion::ServoCarried {
+                        axis: DVec3::new(0.0, 0.0, -1.0),
+                        target_force: target,
+                        gain: 0.02 / target,
+                        max_speed: 0.02,
+                        velocity: v,
+                    };
+                } else if sim.time - self.started > self.p.max_phase_time {
+                    bail!(
+                        "direct_shear: the normal pressure {} Pa ({:.1} N) was not reached: the platen carries {:.1} N after {:.2} s (step {}); the servo cannot reach it with this specimen",
+                        self.p.normal_pressure,
+                        target,
+                        f,
+                        self.p.max_phase_time,
+                        sim.step
+                    );
+                }
+            }
+            Phase::Shear => {
+                let x = self.displacement(sim);
+                let fx = self.shear_force(sim);
+                if fx > self.peak.1 {
+                    self.peak = (x, fx);
+                }
+                let sigma = sim.walls[PLATEN].force.z.max(0.0) / self.area;
+                let i =
+                    specimen::inertial_number(self.speed / self.p.height, self.d, self.rho, sigma);
+                if x > 0.1 * self.p.shear_displacement {
+                    self.max_i = self.max_i.max(i);
+                }
+                if x >= self.p.shear_displacement {
+                    for k in [UPPER, PLATEN] {
+                        sim.walls[k].motion = Motion::Fixed;
+                    }
+                    self.phase = Phase::Done;
+                    return Ok(Control::Done);
+                }
+                let left = ((self.p.shear_displacement - x) / (self.speed * sim.dt)).ceil() as u64;
+                return Ok(Control::Step(block.min(left.max(1))));
+            }
+            Phase::Done => return Ok(Control::Done),
+        }
+        Ok(Control::Step(block))
+    }
+
+    fn scalars(&self, sim: &Simulation) -> Vec<(String, f64)> {
+        let (intact, broken) = sim.bond_counts();
+        let mut out = vec![
+            ("normal_force".to_string(), sim.walls[PLATEN].force.z),
+            ("bonds_intact".to_string(), intact as f64),
+            ("bonds_broken".to_string(), broken as f64),
+        ];
+        // The test's curve: written only while shearing, so that a reducer reads the test,
+        // not the preparation.
+        if matches!(self.phase, Phase::Shear | Phase::Done) {
+            let sigma = sim.walls[PLATEN].force.z.max(0.0) / self.area;
+            out.push(("shear_displacement".into(), self.displacement(sim)));
+            out.push(("shear_force".into(), self.shear_force(sim)));
+            out.push((
+                "inertial_number".into(),
+                specimen::inertial_number(self.speed / self.p.height, self.d, self.rho, sigma),
+            ));
+        }
+        out
+    }
+
+    fn units(&self) -> Vec<(String, String)> {
+        [
+            ("shear_displacement", "m"),
+            ("shear_force", "N"),
+            ("normal_force", "N"),
+            ("inertial_number", "-"),
+            ("bonds_intact", "count"),
+            ("bonds_broken", "count"),
+        ]
+        .iter()
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+        .collect()
+    }
+
+    fn metadata(&self) -> BTreeMap<String, String> {
+        [
+            ("type", "direct_shear".to_string()),
+            ("diameter_m", self.p.box_diameter.to_string()),
+            ("area_m2", self.area.to_string()),
+            ("height_m", self.p.height.to_string()),
+            ("normal_pressure_pa", self.p.normal_pressure.to_string()),
+            ("shear_speed_m_per_s", self.speed.to_string()),
+            ("particle_diameter_m", self.d.to_string()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    }
+
+    fn phase(&self) -> String {
+        match (self.phase, self.prep.phase) {
+            (Phase::Prepare, Prep::Fill) => "filling".into(),
+            (Phase::Prepare, Prep::Settle) => "settling".into(),
+            (Phase::Prepare, _) => "compacting".into(),
+            (Phase::Load, _) => "normal load".into(),
+            (Phase::Shear, _) => "shearing".into(),
+            (Phase::Done, _) => "done".into(),
+        }
+    }
+
+    fn progress(&self, sim: &Simulation) -> f64 {
+        match self.phase {
+            Phase::Prepare => 0.0,
+            Phase::Load => 0.3,
+            Phase::Shear => 0.3 + 0.7 * self.displacement(sim) / self.p.shear_displacement,
+            Phase::Done => 1.0,
+        }
+    }
+
+    fn summary(&self, sim: &Simulation) -> serde_json::Value {
+        let (intact, broken) = sim.bond_counts();
+        serde_json::json!({
+            "peak_shear_force_n": self.peak.1,
+            "peak_at_displacement_m": self.peak.0,
+            "normal_pressure_pa": self.p.normal_pressure,
+            "shear_speed_m_per_s": self.speed,
+            "max_inertial_number": self.max_i,
+            "particles": sim.particles.len(),
+            "bonds_formed": self.bonds,
+            "bonds_intact": intact,
+            "bonds_broken": broken,
+            "completed": self.phase == Phase::Done,
+        })
+    }
+}

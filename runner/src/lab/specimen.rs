@@ -1,0 +1,257 @@
+//! What the direct shear and UCS tests share: filling a cylindrical mould, settling,
+//! compacting with a servo platen, forming bonds, and the inertial number.
+
+use super::experiment::{Common, rayleigh_time, scene::*};
+use anyhow::{Result, bail};
+use tilth_kernel::DVec3;
+use tilth_kernel::sim::Simulation;
+use tilth_kernel::wall::Motion;
+use toml::Value;
+
+/// Mean particle speed, m/s.
+pub fn mean_speed(sim: &Simulation) -> f64 {
+    let p = &sim.particles;
+    if p.is_empty() {
+        return 0.0;
+    }
+    p.velocity.iter().map(|v| v.length()).sum::<f64>() / p.len() as f64
+}
+
+/// The inertial number I = gamma_dot d sqrt(rho / p) (GDR MiDi 2004; physics.md):
+/// below about 1e-3 the loading is quasi-static.
+pub fn inertial_number(strain_rate: f64, d: f64, rho: f64, pressure: f64) -> f64 {
+    if pressure <= 0.0 {
+        return f64::INFINITY;
+    }
+    strain_rate * d * (rho / pressure).sqrt()
+}
+
+/// A servo that drives a platen down (-z) to `force` N, at most `max_speed` m/s, full speed
+/// when the force is missing entirely.
+pub fn press(force: f64, max_speed: f64) -> Motion {
+    Motion::Servo {
+        axis: DVec3::new(0.0, 0.0, -1.0),
+        target_force: force,
+        // Full speed until within 2/3 of the target; higher gains set the platen oscillating.
+        gain: 1.5 * max_speed / force,
+        max_speed,
+    }
+}
+
+/// Fraction of a bond's oscillation time scale sqrt(m / (S_n A)) the time step may be. The
+/// Rayleigh step does not see bonds; each particle carries several in parallel, with their
+/// bending and twisting springs, and at 0.2 of that scale the coarse UCS test gained energy
+/// until it blew up while at 0.07 it ran clean (BENCHMARKS.md, virtual lab).
+pub const BOND_DT_FRACTION: f64 = 0.08;
+
+/// The time step and particle count for a specimen of `volume` (m^3) at `packing`: the
+/// smaller of `dt_fraction` of the Rayleigh time and [`BOND_DT_FRACTION`] of the stiffest
+/// bond's time scale, unless `[simulation] dt` is given.
+pub fn particles_for(c: &Common, d: f64, volume: f64, packing: f64) -> Result<(f64, i64)> {
+    let dt = match c.sim.dt {
+        Some(dt) => dt,
+        None => {
+            let rayleigh = c.sim.dt_fraction * rayleigh_time(c.model, d)?;
+            rayleigh.min(bond_time_scale(c, d)? * BOND_DT_FRACTION)
+        }
+    };
+    let count = (packing * volume / (std::f64::consts::PI * d.powi(3) / 6.0)).round() as i64;
+    Ok((dt, count))
+}
+
+/// Checks shared by both tests (`section` names the TOML table in messages).
+pub fn check_fit(section: &str, box_diameter: f64, height: f64, d: f64) -> Result<()> {
+    if !(d > 0.0 && box_diameter > 0.0 && height > 0.0) {
+        bail!("{section}: diameters and heights must be > 0 m");
+    }
+    if box_diameter < 8.0 * d || height < 4.0 * d {
+        bail!(
+            "{section}: the specimen ({:.1} x {:.1} mm) does not fit particles of {:.1} mm: it needs \
+             at least 8 particle diameters across and 4 in height",
+            box_diameter * 1e3,
+            height * 1e3,
+            d * 1e3
+        );
+    }
+    Ok(())
+}
+
+/// A disc wall.
+pub fn disc(name: &str, z: f64, radius: f64) -> Value {
+    t(&[
+        ("name", s(name)),
+        ("type", s("disc")),
+        ("centre", v3([0.0, 0.0, z])),
+        ("axis", v3([0.0, 0.0, 1.0])),
+        ("radius", f(radius)),
+        ("material", s("steel")),
+    ])
+}
+
+/// An open cylinder wall from `z0` to `z1`.
+pub fn ring(name: &str, z0: f64, z1: f64, radius: f64) -> Value {
+    t(&[
+        ("name", s(name)),
+        ("type", s("cylinder")),
+        ("base", v3([0.0, 0.0, z0])),
+        ("axis", v3([0.0, 0.0, 1.0])),
+        ("radius", f(radius)),
+        ("length", f(z1 - z0)),
+        ("material", s("steel")),
+    ])
+}
+
+/// A factory filling a cylinder of `radius` between `z0` and `z1` with `count` particles.
+pub fn fill(count: i64, d: f64, radius: f64, z0: f64, z1: f64) -> Value {
+    t(&[
+        (
+            "region",
+            t(&[
+                ("type", s("cylinder")),
+                ("base", v3([0.0, 0.0, z0])),
+                ("radius", f(radius)),
+                ("height", f(z1 - z0)),
+            ]),
+        ),
+        ("material", s("soil")),
+        ("count", Value::Integer(count)),
+        ("rate", f(2.0e5)),
+        (
+            "sizes",
+            Value::Array(vec![t(&[("diameter", f(d)), ("fraction", f(1.0))])]),
+        ),
+    ])
+}
+
+/// The `[simulation]` table of a specimen test.
+pub fn simulation(c: &Common, dt: f64, duration: f64, half: f64, top: f64) -> Value {
+    t(&[
+        ("dt", f(dt)),
+        ("duration", f(duration)),
+        ("seed", Value::Integer(c.sim.seed as i64)),
+        ("threads", Value::Integer(c.sim.threads as i64)),
+        (
+            "domain",
+            t(&[
+                ("min", v3([-half, -half, -0.01])),
+                ("max", v3([half, half, top])),
+            ]),
+        ),
+    ])
+}
+
+/// Phases of preparing a specimen, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Prep {
+    Fill,
+    Settle,
+    Compact,
+    Done,
+}
+
+/// Fill -> settle -> compact to `force` with platen `k`. Returns true when the specimen is
+/// compacted (force within 5 % for `hold` s and particles nearly at rest).
+pub struct Preparation {
+    pub phase: Prep,
+    pub platen: usize,
+    pub force: f64,
+    pub count: usize,
+    pub started: f64,
+    pub in_band_since: Option<f64>,
+    pub max_phase_time: f64,
+    /// The platen's initial height (its shape's z), m.
+    pub platen_z: f64,
+    /// Particle diameter, m.
+    pub diameter: f64,
+}
+
+impl Preparation {
+    /// Advances the preparation; errors when a phase cannot finish.
+    pub fn advance(&mut self, sim: &mut Simulation, section: &str) -> Result<bool> {
+        match self.phase {
+            Prep::Fill => {
+                let made: usize = sim.factories.iter().map(|f| f.inserted).sum();
+                let wanted: usize = sim.factories.iter().map(|f| f.spec.count).sum();
+                if made >= wanted {
+                    self.phase = Prep::Settle;
+                    self.started = sim.time;
+                } else if sim.time - self.started > self.max_phase_time {
+                    if made == 0 {
+                        bail!(
+                            "{section}: no particles were generated in {:.2} s: the fill region is too small for the particles",
+                            self.max_phase_time
+                        );
+                    }
+                    bail!(
+                        "{section}: only {made} of {wanted} particles fit in the mould after {:.2} s; lower packing or enlarge the mould",
+                        self.max_phase_time
+                    );
+                }
+            }
+            Prep::Settle => {
+                if (mean_speed(sim) < 0.02 && sim.time - self.started > 0.05)
+                    || sim.time - self.started > self.max_phase_time
+                {
+                    self.phase = Prep::Compact;
+                    self.started = sim.time;
+                    // Nothing lies between the platen and the loose fill: bring it down to
+                    // half a diameter above the highest particle at once instead of driving it.
+                    let p = &sim.particles;
+                    let top = (0..p.len())
+                        .map(|k| p.position[k].z + p.radius[k])
+                        .fold(0.0, f64::max);
+                    let offset = top + 0.5 * self.diameter - self.platen_z;
+                    if offset < sim.walls[self.platen].offset.z {
+                        sim.walls[self.platen].offset.z = offset;
+                    }
+                    sim.walls[self.platen].motion = press(self.force, 0.05);
+                }
+            }
+            Prep::Compact => {
+                let f = sim.walls[self.platen].force.z;
+                let in_band = (f - self.force).abs() < 0.05 * self.force;
+                match (in_band, self.in_band_since) {
+                    (true, None) => self.in_band_since = Some(sim.time),
+                    (false, _) => self.in_band_since = None,
+                    _ => {}
+                }
+                if self.in_band_since.is_some_and(|t0| sim.time - t0 > 0.02) {
+                    self.phase = Prep::Done;
+                    return Ok(true);
+                }
+                if sim.time - self.started > self.max_phase_time {
+                    bail!(
+                        "{section}: the platen reached {:.2} N of the {:.2} N compaction force after {:.2} s (step {}): the servo cannot reach it",
+                        f,
+                        self.force,
+                        self.max_phase_time,
+                        sim.step
+                    );
+                }
+            }
+            Prep::Done => return Ok(true),
+        }
+        Ok(false)
+    }
+}
+
+/// sqrt(m / (S_n A)) of a bond between two particles of diameter `d` with the model's
+/// stiffest bond (s).
+pub fn bond_time_scale(c: &Common, d: f64) -> Result<f64> {
+    let (_, _, pairs) = c.model.scene_parts(c.conditions, true)?;
+    let mut k_max: f64 = 0.0;
+    for pair in pairs.as_array().into_iter().flatten() {
+        let num = |k: &str| pair.get(k).and_then(Value::as_float);
+        if let Some(sn) = num("normal_stiffness_per_area") {
+            let rb = 0.5 * d * num("bond_radius_ratio").unwrap_or(1.0);
+            k_max = k_max.max(sn * std::f64::consts::PI * rb * rb);
+        }
+    }
+    let rho = super::experiment::soil_density(c.model)?;
+    let m = rho * std::f64::consts::PI * d.powi(3) / 6.0;
+    Ok(if k_max > 0.0 {
+        (m / k_max).sqrt()
+    } else {
+        f64::INFINITY
+    })
+}

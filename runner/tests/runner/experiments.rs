@@ -1,0 +1,138 @@
+//! The virtual lab: bad experiment files are refused before anything runs.
+
+use std::path::Path;
+use std::process::Command;
+
+fn tilth() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tilth"))
+}
+
+#[test]
+fn bad_experiment_files_are_refused_before_the_run() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/experiments/bad");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let file = e.unwrap().path();
+        let text = std::fs::read_to_string(&file).unwrap();
+        let want: Vec<&str> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("# error: "))
+            .collect();
+        assert!(!want.is_empty(), "{}: no `# error:` line", file.display());
+        let out_dir = std::env::temp_dir().join(format!("tilth-badexp-{}", std::process::id()));
+        let out = tilth()
+            .arg("run")
+            .arg(&file)
+            .arg("--out")
+            .arg(&out_dir)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{}: {err}", file.display());
+        for w in &want {
+            assert!(
+                err.contains(w),
+                "{}: wanted `{w}` in: {err}",
+                file.display()
+            );
+        }
+        assert!(
+            err.contains(&*file.file_name().unwrap().to_string_lossy()),
+            "{err}"
+        );
+        assert!(
+            !out_dir.exists(),
+            "{}: wrote {}",
+            file.display(),
+            out_dir.display()
+        );
+        n += 1;
+    }
+    assert!(n >= 8);
+}
+
+/// Runs an experiment file in its coarse preset and returns its summary.
+fn coarse(name: &str) -> serde_json::Value {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sweeps/experiments")
+        .join(format!("{name}.toml"));
+    let out = std::env::temp_dir().join(format!("tilth-coarse-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let r = tilth()
+        .args(["run", "--coarse", "--quiet", "--json", "--out"])
+        .arg(&out)
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        r.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(summary["status"], "done");
+    // The reducer, run on the file by the binary, agrees with what the run reported.
+    let mcap = out.join("runs/001/run.mcap");
+    let what = match name {
+        "direct_shear" => "shear",
+        other => other,
+    };
+    let red = tilth()
+        .args(["reduce", what, "--json"])
+        .arg(&mcap)
+        .output()
+        .unwrap();
+    assert!(
+        red.status.success(),
+        "{}",
+        String::from_utf8_lossy(&red.stderr)
+    );
+    let reduced: serde_json::Value = serde_json::from_slice(&red.stdout).unwrap();
+    assert_eq!(reduced["complete"], true);
+    let _ = std::fs::remove_dir_all(&out);
+    serde_json::json!({ "summary": summary, "reduced": reduced })
+}
+
+#[test]
+fn repose_coarse_runs_to_rest_and_reduces_to_an_angle() {
+    let r = coarse("repose");
+    let angle = r["reduced"]["repose_angle_deg"].as_f64().unwrap();
+    assert!(angle > 0.0 && angle < 90.0, "{angle}");
+    assert_eq!(
+        r["summary"]["reduced"]["repose_angle_deg"]
+            .as_f64()
+            .unwrap(),
+        angle
+    );
+    assert_eq!(
+        r["summary"]["experiment"]["settled"], true,
+        "{}",
+        r["summary"]
+    );
+}
+
+#[test]
+fn direct_shear_coarse_shears_5_mm_under_the_set_pressure() {
+    let r = coarse("direct_shear");
+    let e = &r["summary"]["experiment"];
+    assert_eq!(e["completed"], true);
+    // The reducer's peak is the largest recorded shear force; the protocol saw every block.
+    let peak = r["reduced"]["peak_shear_force_n"].as_f64().unwrap();
+    assert!(peak > 0.0);
+    assert!(e["max_inertial_number"].as_f64().unwrap() <= 1e-3);
+    let sigma = r["reduced"]["mean_normal_stress_pa"].as_f64().unwrap();
+    assert!(
+        (sigma - 1e5).abs() < 0.1 * 1e5,
+        "normal stress {sigma} Pa, set 1e5"
+    );
+}
+
+#[test]
+fn ucs_coarse_compresses_the_free_specimen_to_failure_or_15_percent() {
+    let r = coarse("ucs");
+    let e = &r["summary"]["experiment"];
+    assert_eq!(e["completed"], true);
+    let ucs = r["reduced"]["ucs_kpa"].as_f64().unwrap();
+    assert!(ucs > 0.0);
+    assert!(r["reduced"]["strain_at_failure"].as_f64().unwrap() <= 0.15 + 1e-3);
+}

@@ -1,0 +1,139 @@
+//! The heap's silhouettes with the lines fitted to their halves.
+//!
+//! Both axes are in millimetres at the same scale, so the drawn slopes are the measured
+//! angles as a person would see them on the photograph.
+
+use super::{
+    BLUE, DARK_BLUE, DARK_ORANGE, GREY, ORANGE, TITLE_HEIGHT, legend, mesh, plot_error, title_block,
+};
+use crate::reduce::error::ReduceError;
+use crate::reduce::repose::{HalfFit, ReposeResult};
+use crate::reduce::silhouette::{SilhouetteMethod, View};
+use plotters::prelude::*;
+use plotters::style::RGBColor;
+
+const WHAT: &str = "the repose silhouette";
+/// Width of the plotting area, px; its height follows from the data at equal scale.
+const PLOT_WIDTH: u32 = 760;
+const MARGIN: u32 = 15;
+const X_LABELS: u32 = 45;
+const Y_LABELS: u32 = 55;
+
+/// The silhouette of each view (points), the tray top, the height band fitted (dashed) and
+/// the line fitted to each half over that band, with the angles and R^2 in the legend.
+pub fn repose_svg(result: &ReposeResult) -> Result<String, ReduceError> {
+    let a = &result.analysis;
+    let mm = 1e3;
+    let r = a.tray.radius_m * mm;
+    let x = (-r - 2.0)..(r + 2.0);
+    // Room above the apex for the legend (about 18 px an entry) so it hides no point.
+    let entries = 2 + 3 * a.views.len();
+    let px_per_mm = PLOT_WIDTH as f64 / (x.end - x.start);
+    let y = -3.0..(a.heap_height_m * mm * 1.08 + (18 * entries + 24) as f64 / px_per_mm);
+    let plot_height = ((y.end - y.start) * px_per_mm).round() as u32;
+    let size = (
+        PLOT_WIDTH + Y_LABELS + 2 * MARGIN,
+        plot_height + X_LABELS + 2 * MARGIN + TITLE_HEIGHT,
+    );
+    let how = match a.silhouette_method {
+        SilhouetteMethod::Envelope => "outline at bin centres",
+        SilhouetteMethod::HighestTop => "highest top per bin",
+    };
+    let title = format!(
+        "Angle of repose {:.2}° (mean of {} halves; cone fit {:.2}°)",
+        a.repose_angle_deg,
+        2 * a.views.len(),
+        a.cone.angle_deg
+    );
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        let area = title_block(&root, &title, &result.source, WHAT)?;
+        let mut chart = ChartBuilder::on(&area)
+            .margin(MARGIN)
+            .x_label_area_size(X_LABELS)
+            .y_label_area_size(Y_LABELS)
+            .build_cartesian_2d(x, y)
+            .map_err(plot_error(WHAT))?;
+        mesh(
+            &mut chart,
+            "horizontal distance from the tray axis (mm)",
+            "height above the tray top (mm)",
+            WHAT,
+        )?;
+
+        // The tray top and the band fitted.
+        chart
+            .draw_series(LineSeries::new(
+                [(-r, 0.0), (r, 0.0)],
+                BLACK.stroke_width(3),
+            ))
+            .map_err(plot_error(WHAT))?
+            .label(format!("tray top, radius {r:.1} mm"))
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(3)));
+        for (k, h) in [a.band_m.0, a.band_m.1].into_iter().enumerate() {
+            let series = chart
+                .draw_series(DashedLineSeries::new(
+                    [(-r, h * mm), (r, h * mm)],
+                    6,
+                    4,
+                    GREY.stroke_width(1),
+                ))
+                .map_err(plot_error(WHAT))?;
+            if k == 0 {
+                series
+                    .label(format!(
+                        "band fitted: {:.0}-{:.0} % of the heap height ({:.1} mm)",
+                        100.0 * a.band_fraction.0,
+                        100.0 * a.band_fraction.1,
+                        a.heap_height_m * mm
+                    ))
+                    .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], GREY));
+            }
+        }
+
+        for w in &a.views {
+            let (points, line): (RGBColor, RGBColor) = match w.view {
+                View::Xz => (BLUE, DARK_BLUE),
+                View::Yz => (ORANGE, DARK_ORANGE),
+            };
+            let name = match w.view {
+                View::Xz => "x-z",
+                View::Yz => "y-z",
+            };
+            chart
+                .draw_series(
+                    w.silhouette_m
+                        .iter()
+                        .map(|&(u, h)| Circle::new((u * mm, h * mm), 2, points.filled())),
+                )
+                .map_err(plot_error(WHAT))?
+                .label(format!("{name} silhouette ({how})"))
+                .legend(move |(x, y)| Circle::new((x + 10, y), 3, points.filled()));
+            for (side, half) in [("left", w.left), ("right", w.right)] {
+                chart
+                    .draw_series(LineSeries::new(
+                        band_line(&half, a.band_m, mm),
+                        line.stroke_width(2),
+                    ))
+                    .map_err(plot_error(WHAT))?
+                    .label(format!(
+                        "{name} {side}: {:.2}° (R² {:.3}, {} points)",
+                        half.angle_deg, half.r_squared, half.points
+                    ))
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 20, y)], line.stroke_width(2))
+                    });
+            }
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight, WHAT)?;
+        root.present().map_err(plot_error(WHAT))?;
+    }
+    Ok(svg)
+}
+
+/// The fitted line h = a + b u between the band's heights, in mm.
+fn band_line(half: &HalfFit, band_m: (f64, f64), mm: f64) -> [(f64, f64); 2] {
+    let u = |h: f64| (h - half.intercept_m) / half.slope;
+    [band_m.0, band_m.1].map(|h| (u(h) * mm, h * mm))
+}
