@@ -2,12 +2,12 @@
 //!
 //! Everything is in the frame `world` (z up, metres). Timestamps are simulated time.
 
-use super::snapshot::{POINT_STRIDE, WallShape};
+use super::snapshot::{BOND_STRIDE, POINT_STRIDE, WallShape};
 use foxglove::bytes::Bytes;
 use foxglove::messages::{
-    Color, CubePrimitive, CylinderPrimitive, PackedElementField, PointCloud, Pose, Quaternion,
-    SceneEntity, SceneUpdate, SpherePrimitive, Timestamp, TriangleListPrimitive, Vector3,
-    packed_element_field::NumericType,
+    Color, CubePrimitive, CylinderPrimitive, LinePrimitive, PackedElementField, Point3, PointCloud,
+    Pose, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Timestamp, TriangleListPrimitive,
+    Vector3, line_primitive, packed_element_field::NumericType,
 };
 use glam::{DQuat, DVec3};
 
@@ -215,4 +215,113 @@ pub fn vector3(v: [f64; 3]) -> Vector3 {
 /// have no scalar message; plot `/scalars/<name>.x`).
 pub fn scalar(v: f64) -> Vector3 {
     vector([v, 0.0, 0.0])
+}
+
+/// Every bond as a point at its middle carrying its whole state (see
+/// [`super::snapshot::BOND_STRIDE`]): Foxglove colours the points by any field.
+pub fn bond_cloud(time: f64, points: Vec<u8>) -> PointCloud {
+    let field = |name: &str, offset: u32, kind: NumericType| PackedElementField {
+        name: name.to_string(),
+        offset,
+        r#type: kind as i32,
+    };
+    let f32s = [
+        "normal_force",
+        "shear_force_x",
+        "shear_force_y",
+        "shear_force_z",
+        "normal_moment",
+        "shear_moment_x",
+        "shear_moment_y",
+        "shear_moment_z",
+    ];
+    let mut fields = vec![
+        field("x", 0, NumericType::Float32),
+        field("y", 4, NumericType::Float32),
+        field("z", 8, NumericType::Float32),
+        field("i", 12, NumericType::Uint32),
+        field("j", 16, NumericType::Uint32),
+    ];
+    for (k, name) in f32s.iter().enumerate() {
+        fields.push(field(name, 20 + 4 * k as u32, NumericType::Float32));
+    }
+    fields.push(field("intact", 52, NumericType::Uint32));
+    fields.push(field("broken_time", 56, NumericType::Float32));
+    PointCloud {
+        timestamp: Some(timestamp(time)),
+        frame_id: FRAME.to_string(),
+        pose: Some(identity()),
+        point_stride: BOND_STRIDE as u32,
+        fields,
+        data: Bytes::from(points),
+    }
+}
+
+/// Intact bonds as line segments between the bonded particles' centres, coloured by their
+/// normal force (red in tension, blue in compression, full colour at `scale` N).
+pub fn bond_lines(
+    time: f64,
+    bonds: &[u8],
+    centres: &std::collections::HashMap<u32, [f64; 3]>,
+) -> SceneUpdate {
+    let mut points = vec![];
+    let mut colors = vec![];
+    let forces: Vec<f64> = bonds
+        .chunks_exact(BOND_STRIDE)
+        .map(|b| f32_at(b, 20).abs())
+        .collect();
+    let scale = forces.iter().cloned().fold(0.0, f64::max).max(1e-12);
+    for b in bonds.chunks_exact(BOND_STRIDE) {
+        let u = |k: usize| u32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
+        if u(52) == 0 {
+            continue;
+        }
+        let (Some(a), Some(c)) = (centres.get(&u(12)), centres.get(&u(16))) else {
+            continue;
+        };
+        let fnorm = f32_at(b, 20);
+        let s = (fnorm.abs() / scale).clamp(0.0, 1.0);
+        let colour = if fnorm < 0.0 {
+            Color {
+                r: 0.4 + 0.6 * s,
+                g: 0.4 * (1.0 - s),
+                b: 0.4 * (1.0 - s),
+                a: 1.0,
+            }
+        } else {
+            Color {
+                r: 0.4 * (1.0 - s),
+                g: 0.4 * (1.0 - s),
+                b: 0.4 + 0.6 * s,
+                a: 1.0,
+            }
+        };
+        for q in [a, c] {
+            points.push(Point3 {
+                x: q[0],
+                y: q[1],
+                z: q[2],
+            });
+            colors.push(colour);
+        }
+    }
+    SceneUpdate {
+        deletions: vec![],
+        entities: vec![SceneEntity {
+            timestamp: Some(timestamp(time)),
+            frame_id: FRAME.to_string(),
+            id: "bonds".to_string(),
+            lines: vec![LinePrimitive {
+                r#type: line_primitive::Type::LineList as i32,
+                pose: Some(identity()),
+                thickness: 1.0,
+                scale_invariant: true,
+                points,
+                color: None,
+                colors,
+                indices: vec![],
+            }],
+            ..Default::default()
+        }],
+    }
 }

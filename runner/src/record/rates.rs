@@ -16,6 +16,10 @@ pub struct RecordSection {
     /// Scalar time series (`/scalars/<name>`): kinetic energy, contacts, the observable.
     #[serde(default = "default_scalars_hz")]
     pub scalars_hz: f64,
+    /// Bonds (`/bonds`: every bond's state; `/bonds/lines`: intact bonds coloured by force),
+    /// when the run has any.
+    #[serde(default = "default_bonds_hz")]
+    pub bonds_hz: f64,
     /// Also write every particle as a sphere in a `foxglove.SceneUpdate` (`/spheres`),
     /// which Foxglove draws at true size; off by default because it is ten times larger.
     #[serde(default)]
@@ -35,6 +39,9 @@ fn default_walls_hz() -> f64 {
 fn default_scalars_hz() -> f64 {
     500.0
 }
+fn default_bonds_hz() -> f64 {
+    10.0
+}
 fn default_flush_frames() -> u32 {
     5
 }
@@ -45,6 +52,7 @@ impl Default for RecordSection {
             particles_hz: default_particles_hz(),
             walls_hz: default_walls_hz(),
             scalars_hz: default_scalars_hz(),
+            bonds_hz: default_bonds_hz(),
             spheres: false,
             flush_frames: default_flush_frames(),
         }
@@ -57,6 +65,7 @@ pub struct FrameRates {
     pub particles: u64,
     pub walls: u64,
     pub scalars: u64,
+    pub bonds: u64,
 }
 
 impl RecordSection {
@@ -82,6 +91,7 @@ impl RecordSection {
             particles: interval("particles_hz", self.particles_hz)?,
             walls: interval("walls_hz", self.walls_hz)?,
             scalars: interval("scalars_hz", self.scalars_hz)?,
+            bonds: interval("bonds_hz", self.bonds_hz)?,
         })
     }
 }
@@ -89,7 +99,7 @@ impl RecordSection {
 impl FrameRates {
     /// Steps from `step` to the next step at which some channel is due (at most `max`).
     pub fn steps_to_next(&self, step: u64, max: u64) -> u64 {
-        [self.particles, self.walls, self.scalars]
+        [self.particles, self.walls, self.scalars, self.bonds]
             .iter()
             .filter(|&&k| k > 0)
             .map(|&k| k - step % k)

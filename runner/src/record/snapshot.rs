@@ -21,12 +21,20 @@ pub enum Record {
         forces: Vec<[f64; 3]>,
         torques: Vec<[f64; 3]>,
     },
+    /// Every bond ever formed, packed as [`BOND_STRIDE`]-byte points at the bond's middle.
+    Bonds { time: f64, points: Vec<u8> },
     /// Named scalar values, one topic `/scalars/<name>` each.
     Scalars {
         time: f64,
         values: Vec<(String, f64)>,
     },
 }
+
+/// Bytes per bond in `/bonds`: x, y, z (the middle, f32, m), i, j (u32 ids), normal force,
+/// shear force x, y, z (f32, N, on i; normal force positive in compression), twisting
+/// moment, bending moment x, y, z (f32, N m), intact (u32: 1 or 0), broken time (f32, s;
+/// -1 while intact).
+pub const BOND_STRIDE: usize = 60;
 
 /// How a wall is drawn (its initial pose; the recorded offset moves it).
 #[derive(Debug, Clone)]
@@ -97,4 +105,50 @@ pub fn scalars(sim: &Simulation, extra: &[(String, f64)]) -> Record {
         time: sim.time,
         values,
     }
+}
+
+/// Packs every bond of `sim` into a [`Record::Bonds`] (`None` without bonds).
+pub fn bonds(sim: &Simulation) -> Option<Record> {
+    let bonds = sim.bonds();
+    if bonds.is_empty() {
+        return None;
+    }
+    let p = &sim.particles;
+    let max_id = p.id.iter().copied().max().unwrap_or(0) as usize;
+    let mut index = vec![usize::MAX; max_id + 1];
+    for (k, &id) in p.id.iter().enumerate() {
+        index[id as usize] = k;
+    }
+    let mut points = Vec::with_capacity(bonds.len() * BOND_STRIDE);
+    for b in &bonds {
+        let at = |id: u32| index.get(id as usize).copied().filter(|&k| k != usize::MAX);
+        let mid = match (at(b.i), at(b.j)) {
+            (Some(a), Some(c)) => 0.5 * (p.position[a] + p.position[c]),
+            _ => continue,
+        };
+        let l = &b.loads;
+        for v in [mid.x, mid.y, mid.z] {
+            points.extend_from_slice(&(v as f32).to_le_bytes());
+        }
+        points.extend_from_slice(&b.i.to_le_bytes());
+        points.extend_from_slice(&b.j.to_le_bytes());
+        for v in [
+            l.normal_force,
+            l.shear_force.x,
+            l.shear_force.y,
+            l.shear_force.z,
+            l.normal_moment,
+            l.shear_moment.x,
+            l.shear_moment.y,
+            l.shear_moment.z,
+        ] {
+            points.extend_from_slice(&(v as f32).to_le_bytes());
+        }
+        points.extend_from_slice(&(b.intact() as u32).to_le_bytes());
+        points.extend_from_slice(&(b.broken_time.unwrap_or(-1.0) as f32).to_le_bytes());
+    }
+    Some(Record::Bonds {
+        time: sim.time,
+        points,
+    })
 }

@@ -166,6 +166,8 @@ struct Writer {
     clouds_since_flush: u32,
     last_flush: Instant,
     busy: Duration,
+    /// Particle centres by id, from the last particle frame (for bond lines).
+    centres: HashMap<u32, [f64; 3]>,
 }
 
 impl Writer {
@@ -190,6 +192,7 @@ impl Writer {
             clouds_since_flush: 0,
             last_flush: Instant::now(),
             busy: Duration::ZERO,
+            centres: HashMap::new(),
         })
     }
 
@@ -259,6 +262,17 @@ impl Writer {
                     let s = encode::spheres(time, &points);
                     self.put("/spheres", None, time, &s)?;
                 }
+                // Bond lines need the centres of the last particle frame.
+                self.centres = points
+                    .chunks_exact(super::snapshot::POINT_STRIDE)
+                    .map(|q| {
+                        let f = |k: usize| {
+                            f32::from_le_bytes([q[k], q[k + 1], q[k + 2], q[k + 3]]) as f64
+                        };
+                        let id = u32::from_le_bytes([q[20], q[21], q[22], q[23]]);
+                        (id, [f(0), f(4), f(8)])
+                    })
+                    .collect();
                 let cloud = encode::point_cloud(time, points);
                 self.put("/particles", None, time, &cloud)?;
                 self.stats.particle_frames += 1;
@@ -278,6 +292,12 @@ impl Writer {
                     let m = encode::vector3(torques[k]);
                     self.put(&format!("/walls/{name}/torque"), Some("N m"), time, &m)?;
                 }
+            }
+            Record::Bonds { time, points } => {
+                let lines = encode::bond_lines(time, &points, &self.centres);
+                self.put("/bonds/lines", None, time, &lines)?;
+                let cloud = encode::bond_cloud(time, points);
+                self.put("/bonds", None, time, &cloud)?;
             }
             Record::Scalars { time, values } => {
                 for (name, v) in values {

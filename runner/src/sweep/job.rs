@@ -245,6 +245,11 @@ fn simulate(
         if crate::record::FrameRates::due(rates.scalars, step) {
             rec.send(snapshot::scalars(sim, &extra(sim, protocol)))?;
         }
+        if crate::record::FrameRates::due(rates.bonds, step) {
+            if let Some(b) = snapshot::bonds(sim) {
+                rec.send(b)?;
+            }
+        }
         Ok(())
     };
     let t0 = Instant::now();

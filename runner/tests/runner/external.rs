@@ -211,3 +211,27 @@ fn a_slurm_job_array_runs_the_sweep_and_status_merges_the_shards() {
     }
     let _ = std::fs::remove_dir_all(&base);
 }
+
+#[test]
+fn bonds_are_recorded_and_decode_with_foxglove_schemas() {
+    let Some(py) = python() else { return };
+    let out = std::env::temp_dir().join(format!("tilth-bonds-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    run_ok(
+        tilth()
+            .args(["run", "--coarse", "--quiet", "--out"])
+            .arg(&out)
+            .arg(repo("sweeps/experiments/direct_shear.toml")),
+    );
+    let mcap = out.join("runs/001/run.mcap");
+    let report = run_ok(Command::new(&py).arg(script("check_mcap.py")).arg(&mcap));
+    for topic in [
+        "/bonds ",
+        "/bonds/lines",
+        "/scalars/bonds_intact",
+        "/scalars/shear_force",
+    ] {
+        assert!(report.contains(topic), "{topic} missing:\n{report}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
