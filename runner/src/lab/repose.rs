@@ -24,9 +24,9 @@ pub struct ReposeParams {
     pub mass_g: Option<f64>,
     /// Particle diameter, m (the study: 2 mm). Coarse preset: 4 mm.
     pub diameter: Option<f64>,
-    /// Height of the funnel outlet above the tray, m. The study does not give it; 30 mm
-    /// leaves room above a 35 degree heap on the tray (22 mm high) so that the heap is not
-    /// cut by the outlet.
+    /// Height of the funnel outlet above the tray, m. The study does not give it; 60 mm
+    /// leaves room above heaps up to about 62 degrees on the 61.8 mm tray (a 35 degree heap
+    /// is 22 mm high), so that the outlet does not cut the heap it measures.
     #[serde(default = "default_drop")]
     pub drop_height: f64,
     /// Particles generated per second (the study: 20,000).
@@ -58,7 +58,7 @@ pub struct ReposeParams {
 }
 
 fn default_drop() -> f64 {
-    0.03
+    0.06
 }
 fn default_rate() -> f64 {
     20_000.0
