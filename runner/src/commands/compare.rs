@@ -164,8 +164,9 @@ pub struct Compared {
 }
 
 fn experiment_text(test: &str, model: &Path, coarse: bool) -> String {
+    // The test's own table is written (empty: defaults) so that factors can set its keys.
     format!(
-        "format_version = 1\nexperiment = \"{test}\"\nmodel = {:?}\ncoarse = {coarse}\n[conditions]\n",
+        "format_version = 1\nexperiment = \"{test}\"\nmodel = {:?}\ncoarse = {coarse}\n[conditions]\n[{test}]\n",
         model.display().to_string()
     )
 }

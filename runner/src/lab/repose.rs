@@ -302,9 +302,14 @@ impl ReposeProtocol {
         if p.len() < self.count || sim.time < self.fill_time {
             return false;
         }
-        // Particles left in the funnel at rest are residue, as in the real test.
-        let mean_speed = p.velocity.iter().map(|v| v.length()).sum::<f64>() / p.len() as f64;
-        if mean_speed > self.p.rest_speed {
+        // Below the outlet: what is left in the funnel at rest is residue (or, when the heap
+        // has grown up to the outlet, the soil the heap holds back).
+        let (sum, n) = (0..p.len())
+            .filter(|&k| p.position[k].z < self.z_out)
+            .fold((0.0, 0usize), |(s, n), k| {
+                (s + p.velocity[k].length(), n + 1)
+            });
+        if n == 0 || sum / n as f64 > self.p.rest_speed {
             return false;
         }
         let since = sim.time - self.p.rest_time;
@@ -322,6 +327,12 @@ impl ReposeProtocol {
 }
 
 impl ReposeProtocol {
+    /// Whether the heap on the tray has grown up to the funnel outlet.
+    fn reached_outlet(&self, sim: &Simulation) -> bool {
+        let h = observe::heap(sim, self.tray);
+        h.height_m >= self.p.drop_height - self.diameter
+    }
+
     /// Fails when particles stay in the funnel, at rest, well after the pour: the outlet
     /// arched over (cohesion, or particles too large for it).
     fn check_jam(&self, sim: &Simulation) -> Result<()> {
@@ -425,8 +436,11 @@ impl Protocol for ReposeProtocol {
             "particles_on_tray": h.particles_on_tray,
             "particles": sim.particles.len(),
             "particles_left_in_funnel": sim.particles.position.iter().filter(|x| x.z > self.z_out).count(),
+            "heap_reached_outlet": self.reached_outlet(sim),
             "warning": if self.settled_at.is_none() {
                 Some(format!("the heap was not at rest at max_time = {} s; raise repose.max_time", self.p.max_time))
+            } else if self.reached_outlet(sim) {
+                Some(format!("the heap grew up to the funnel outlet ({} m above the tray): its angle is cut there and is a lower bound; raise repose.drop_height", self.p.drop_height))
             } else { None },
         })
     }

@@ -253,7 +253,10 @@ impl Protocol for ShearProtocol {
             Phase::Load => {
                 let target = self.p.normal_pressure * self.area;
                 let f = sim.walls[PLATEN].force.z;
-                let in_band = (f - target).abs() < 0.02 * target;
+                // 3 %: under a constant platen speed the specimen creeps (grains rearrange),
+                // so the servo approaches its target slowly; the reducer reports the normal
+                // stress actually carried during shearing.
+                let in_band = (f - target).abs() < 0.03 * target;
                 match (in_band, self.in_band_since) {
                     (true, None) => self.in_band_since = Some(sim.time),
                     (false, _) => self.in_band_since = None,

@@ -136,3 +136,59 @@ fn ucs_coarse_compresses_the_free_specimen_to_failure_or_15_percent() {
     assert!(ucs > 0.0);
     assert!(r["reduced"]["strain_at_failure"].as_f64().unwrap() <= 0.15 + 1e-3);
 }
+
+#[test]
+fn compare_puts_simulated_next_to_measured_with_errors_from_their_definition() {
+    let base = std::env::temp_dir().join(format!("tilth-compare-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let data = base.join("m.csv");
+    std::fs::write(
+        &data,
+        "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source\n\
+         repose,6,,,repose_angle_deg,35.53,deg,,10,table 1\n\
+         direct_shear,6,1.55,100000,peak_shear_force_n,197.4,N,,,table 12\n",
+    )
+    .unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml");
+    let out = base.join("out");
+    let r = tilth()
+        .args(["compare", "--coarse", "--quiet", "--model"])
+        .arg(&model)
+        .arg("--data")
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("compare.json")).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        let sim = row["simulated_mean"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{row}"));
+        let meas = row["value"].as_f64().unwrap();
+        let rel = row["relative_error"].as_f64().unwrap();
+        assert!((rel - (sim - meas) / meas).abs() < 1e-12);
+    }
+    assert!(out.join("compare.md").exists() && out.join("compare.csv").exists());
+    // A bad row is refused with its file and line before anything runs.
+    std::fs::write(&data, "test,observable,value,unit\ntriaxial,q,1,kPa\n").unwrap();
+    let r = tilth()
+        .args(["compare", "--quiet", "--model"])
+        .arg(&model)
+        .arg("--data")
+        .arg(&data)
+        .arg("--out")
+        .arg(base.join("bad"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(err.contains("m.csv:2: test `triaxial` is unknown"), "{err}");
+    assert!(!base.join("bad").exists());
+    let _ = std::fs::remove_dir_all(&base);
+}

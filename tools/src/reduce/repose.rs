@@ -62,6 +62,14 @@ pub struct Tray {
     pub top_z_m: f64,
     pub centre_x_m: f64,
     pub centre_y_m: f64,
+    /// Particles higher than this above the tray top are not part of the heap (those still
+    /// in the funnel), m; from `drop_height_m` when the run has one.
+    #[serde(default = "unbounded")]
+    pub ceiling_m: f64,
+}
+
+fn unbounded() -> f64 {
+    f64::INFINITY
 }
 
 impl Tray {
@@ -72,6 +80,9 @@ impl Tray {
             top_z_m: run.experiment_number("tray_top_z_m")?,
             centre_x_m: run.experiment_number("tray_centre_x_m")?,
             centre_y_m: run.experiment_number("tray_centre_y_m")?,
+            ceiling_m: run
+                .experiment_number("drop_height_m")
+                .unwrap_or(f64::INFINITY),
         })
     }
 }
@@ -195,7 +206,10 @@ pub fn repose_angle(
     let (mut u, mut v, mut h, mut rad) = (vec![], vec![], vec![], vec![]);
     for k in 0..cloud.len() {
         let (dx, dy) = (cloud.x[k] - tray.centre_x_m, cloud.y[k] - tray.centre_y_m);
-        if dx.hypot(dy) <= tray.radius_m && cloud.z[k] > tray.top_z_m {
+        if dx.hypot(dy) <= tray.radius_m
+            && cloud.z[k] > tray.top_z_m
+            && cloud.z[k] < tray.top_z_m + tray.ceiling_m
+        {
             u.push(dx);
             v.push(dy);
             h.push(cloud.z[k] + cloud.radius[k] - tray.top_z_m);
@@ -347,6 +361,7 @@ mod tests {
             top_z_m: 0.0,
             centre_x_m: 0.0,
             centre_y_m: 0.0,
+            ceiling_m: f64::INFINITY,
         };
         for theta in [30.0, 40.0] {
             let a = repose_angle(&ring_cone(theta), &tray, &ReposeOptions::default()).unwrap();
@@ -367,6 +382,7 @@ mod tests {
             top_z_m: 0.0,
             centre_x_m: 0.0,
             centre_y_m: 0.0,
+            ceiling_m: f64::INFINITY,
         };
         let options = ReposeOptions {
             band: (0.5, 0.2),

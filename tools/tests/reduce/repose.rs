@@ -22,6 +22,7 @@ fn tray() -> Tray {
         top_z_m: cone::TRAY_TOP,
         centre_x_m: cone::CENTRE.0,
         centre_y_m: cone::CENTRE.1,
+        ceiling_m: f64::INFINITY,
     }
 }
 
