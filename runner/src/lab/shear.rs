@@ -91,23 +91,17 @@ const PLATEN: usize = 3;
 pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     let d = p.diameter.unwrap_or(if c.coarse { 0.004 } else { 0.002 });
     specimen::check_fit("direct_shear", p.box_diameter, p.height, d)?;
-    for (k, v) in [
-        ("normal_pressure", p.normal_pressure),
-        ("compaction_force", p.compaction_force),
-        ("shear_displacement", p.shear_displacement),
-        ("max_inertial_number", p.max_inertial_number),
-        ("max_phase_time", p.max_phase_time),
-    ] {
-        if !(v > 0.0 && v.is_finite()) {
-            bail!("direct_shear.{k} = {v} is out of range: allowed (0, inf)");
-        }
-    }
-    if !(p.packing > 0.1 && p.packing < 0.74) {
-        bail!(
-            "direct_shear.packing = {} is out of range: allowed (0.1, 0.74)",
-            p.packing
-        );
-    }
+    specimen::check_positive(
+        "direct_shear",
+        &[
+            ("normal_pressure", p.normal_pressure),
+            ("compaction_force", p.compaction_force),
+            ("shear_displacement", p.shear_displacement),
+            ("max_inertial_number", p.max_inertial_number),
+            ("max_phase_time", p.max_phase_time),
+        ],
+    )?;
+    specimen::check_packing("direct_shear", p.packing)?;
     let rho = soil_density(c.model)?;
     let e = super::experiment::soil_modulus(c.model)?;
     // Hertz overlaps grow as (p/E)^(2/3): at p = 2 % of E they pass 7 % of the radius, where
@@ -168,17 +162,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     Ok(Built {
         scene,
         protocol: Box::new(ShearProtocol {
-            prep: Preparation {
-                phase: Prep::Fill,
-                platen: PLATEN,
-                force: p.compaction_force,
-                count: count as usize,
-                started: 0.0,
-                in_band_since: None,
-                max_phase_time: p.max_phase_time,
-                platen_z: z_top,
-                diameter: d,
-            },
+            prep: Preparation::new(PLATEN, p.compaction_force, p.max_phase_time, z_top, d),
             phase: Phase::Prepare,
             p: p.clone(),
             area,
@@ -334,21 +318,18 @@ impl Protocol for ShearProtocol {
     }
 
     fn units(&self) -> Vec<(String, String)> {
-        [
+        specimen::units(&[
             ("shear_displacement", "m"),
             ("shear_force", "N"),
             ("normal_force", "N"),
             ("inertial_number", "-"),
             ("bonds_intact", "count"),
             ("bonds_broken", "count"),
-        ]
-        .iter()
-        .map(|(a, b)| (a.to_string(), b.to_string()))
-        .collect()
+        ])
     }
 
     fn metadata(&self) -> BTreeMap<String, String> {
-        [
+        specimen::record(vec![
             ("type", "direct_shear".to_string()),
             ("diameter_m", self.p.box_diameter.to_string()),
             ("area_m2", self.area.to_string()),
@@ -356,10 +337,7 @@ impl Protocol for ShearProtocol {
             ("normal_pressure_pa", self.p.normal_pressure.to_string()),
             ("shear_speed_m_per_s", self.speed.to_string()),
             ("particle_diameter_m", self.d.to_string()),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
+        ])
     }
 
     fn phase(&self) -> String {

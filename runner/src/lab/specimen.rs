@@ -59,6 +59,36 @@ pub fn particles_for(c: &Common, d: f64, volume: f64, packing: f64) -> Result<(f
     Ok((dt, count))
 }
 
+/// Refuses any of `values` that is not a finite number above 0 (`section.key` in messages).
+pub fn check_positive(section: &str, values: &[(&str, f64)]) -> Result<()> {
+    for (k, v) in values {
+        if !(*v > 0.0 && v.is_finite()) {
+            bail!("{section}.{k} = {v} is out of range: allowed (0, inf)");
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a solid fraction no sphere packing has.
+pub fn check_packing(section: &str, packing: f64) -> Result<()> {
+    if !(packing > 0.1 && packing < 0.74) {
+        bail!("{section}.packing = {packing} is out of range: allowed (0.1, 0.74)");
+    }
+    Ok(())
+}
+
+/// (name, unit) pairs as the protocol reports them.
+pub fn units(list: &[(&str, &str)]) -> Vec<(String, String)> {
+    list.iter()
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+        .collect()
+}
+
+/// A metadata record from (key, value) pairs.
+pub fn record(list: Vec<(&str, String)>) -> std::collections::BTreeMap<String, String> {
+    list.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
+}
+
 /// Checks shared by both tests (`section` names the TOML table in messages).
 pub fn check_fit(section: &str, box_diameter: f64, height: f64, d: f64) -> Result<()> {
     if !(d > 0.0 && box_diameter > 0.0 && height > 0.0) {
@@ -155,7 +185,6 @@ pub struct Preparation {
     pub phase: Prep,
     pub platen: usize,
     pub force: f64,
-    pub count: usize,
     pub started: f64,
     pub in_band_since: Option<f64>,
     pub max_phase_time: f64,
@@ -166,6 +195,27 @@ pub struct Preparation {
 }
 
 impl Preparation {
+    /// Preparation with platen wall `platen` (its shape at height `platen_z`, m) compacting
+    /// particles of diameter `diameter` (m) to `force` (N), each phase within `max_phase_time` s.
+    pub fn new(
+        platen: usize,
+        force: f64,
+        max_phase_time: f64,
+        platen_z: f64,
+        diameter: f64,
+    ) -> Self {
+        Preparation {
+            phase: Prep::Fill,
+            platen,
+            force,
+            started: 0.0,
+            in_band_since: None,
+            max_phase_time,
+            platen_z,
+            diameter,
+        }
+    }
+
     /// Advances the preparation; errors when a phase cannot finish.
     pub fn advance(&mut self, sim: &mut Simulation, section: &str) -> Result<bool> {
         match self.phase {

@@ -95,16 +95,15 @@ const PLATEN: usize = 2;
 pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     let d = p.diameter.unwrap_or(if c.coarse { 0.004 } else { 0.002 });
     specimen::check_fit("ucs", p.mould_diameter, p.height, d)?;
-    for (k, v) in [
-        ("compaction_force", p.compaction_force),
-        ("max_inertial_number", p.max_inertial_number),
-        ("reference_stress", p.reference_stress),
-        ("max_phase_time", p.max_phase_time),
-    ] {
-        if !(v > 0.0 && v.is_finite()) {
-            bail!("ucs.{k} = {v} is out of range: allowed (0, inf)");
-        }
-    }
+    specimen::check_positive(
+        "ucs",
+        &[
+            ("compaction_force", p.compaction_force),
+            ("max_inertial_number", p.max_inertial_number),
+            ("reference_stress", p.reference_stress),
+            ("max_phase_time", p.max_phase_time),
+        ],
+    )?;
     if !(p.max_strain > 0.0 && p.max_strain < 0.5) {
         bail!(
             "ucs.max_strain = {} is out of range: allowed (0, 0.5)",
@@ -117,12 +116,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
             p.peak_drop
         );
     }
-    if !(p.packing > 0.1 && p.packing < 0.74) {
-        bail!(
-            "ucs.packing = {} is out of range: allowed (0.1, 0.74)",
-            p.packing
-        );
-    }
+    specimen::check_packing("ucs", p.packing)?;
     let rho = soil_density(c.model)?;
     let i_at = |v: f64, h: f64| specimen::inertial_number(v / h, d, rho, p.reference_stress);
     let speed = match p.speed {
@@ -176,17 +170,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     Ok(Built {
         scene,
         protocol: Box::new(UcsProtocol {
-            prep: Preparation {
-                phase: Prep::Fill,
-                platen: PLATEN,
-                force: p.compaction_force,
-                count: count as usize,
-                started: 0.0,
-                in_band_since: None,
-                max_phase_time: p.max_phase_time,
-                platen_z: z_top,
-                diameter: d,
-            },
+            prep: Preparation::new(PLATEN, p.compaction_force, p.max_phase_time, z_top, d),
             phase: Phase::Prepare,
             p: p.clone(),
             area,
@@ -385,30 +369,24 @@ impl Protocol for UcsProtocol {
     }
 
     fn units(&self) -> Vec<(String, String)> {
-        [
+        specimen::units(&[
             ("platen_force", "N"),
             ("axial_strain", "-"),
             ("axial_force", "N"),
             ("inertial_number", "-"),
             ("bonds_intact", "count"),
             ("bonds_broken", "count"),
-        ]
-        .iter()
-        .map(|(a, b)| (a.to_string(), b.to_string()))
-        .collect()
+        ])
     }
 
     fn metadata(&self) -> BTreeMap<String, String> {
-        [
+        specimen::record(vec![
             ("type", "ucs".to_string()),
             ("diameter_m", self.p.mould_diameter.to_string()),
             ("height_m", self.p.height.to_string()),
             ("speed_m_per_s", self.speed.to_string()),
             ("particle_diameter_m", self.d.to_string()),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
+        ])
     }
 
     fn phase(&self) -> String {
