@@ -445,8 +445,13 @@ impl Simulation {
         let old = &self.walls_near;
         let stride = self.model.history_stride();
         let order = self.pending_order.take();
+        let model = &self.model;
+        let bonded = self.bonded;
+        let keep = |h: &[f64]| model.bond_intact(h);
         let new_walls = self.pool.install(|| {
-            pairs.rebuild(&p.position, &p.radius, &p.id, extra, order.as_deref());
+            // Intact bonds keep their pairs in the list, however far they stretch.
+            let keep: Option<&(dyn Fn(&[f64]) -> bool + Sync)> = bonded.then_some(&keep);
+            pairs.rebuild_keeping(&p.position, &p.radius, &p.id, extra, order.as_deref(), keep);
             build_wall_contacts(p, walls, old, extra, stride, order.as_deref())
         });
         self.walls_near = new_walls;

@@ -56,7 +56,30 @@ impl PairList {
         extra: f64,
         old_of_new: Option<&[u32]>,
     ) {
+        self.rebuild_keeping(position, radius, id, extra, old_of_new, None)
+    }
+
+    /// Like [`PairList::rebuild`], and also keeps every old pair whose history row `keep`
+    /// accepts, however far apart its particles are now (bonded pairs: a bond holds its
+    /// pair, so the list need not reach as far as a bond can stretch).
+    pub fn rebuild_keeping(
+        &mut self,
+        position: &[DVec3],
+        radius: &[f64],
+        id: &[u32],
+        extra: f64,
+        old_of_new: Option<&[u32]>,
+        keep: Option<&(dyn Fn(&[f64]) -> bool + Sync)>,
+    ) {
         let n = position.len();
+        // New index of each old particle, to bring kept partners across a reorder.
+        let new_of_old: Option<Vec<u32>> = old_of_new.filter(|_| keep.is_some()).map(|m| {
+            let mut inv = vec![0u32; m.len()];
+            for (new, &old) in m.iter().enumerate() {
+                inv[old as usize] = new as u32;
+            }
+            inv
+        });
         let r_max = radius.iter().copied().fold(0.0, f64::max);
         let grid = CellGrid::build(position, 2.0 * r_max + extra);
         let old = &*self;
@@ -83,8 +106,6 @@ impl PairList {
                             }
                         }
                     });
-                    near.sort_unstable();
-                    out.counts.push(near.len() as u32);
                     // Carry history from the old row of the same particle. Without a reorder
                     // both rows ascend in j and merge; after one, look each partner up.
                     let oi = old_of_new.map_or(i, |m| m[i] as usize);
@@ -93,6 +114,22 @@ impl PairList {
                     } else {
                         0..0
                     };
+                    if let Some(keep) = keep {
+                        for q in old_row.clone() {
+                            if keep(&old.history[q * stride..(q + 1) * stride]) {
+                                let j = match &new_of_old {
+                                    None => old.j[q],
+                                    Some(inv) => inv[old.j[q] as usize],
+                                };
+                                near.push(j);
+                            }
+                        }
+                        near.sort_unstable();
+                        near.dedup();
+                    } else {
+                        near.sort_unstable();
+                    }
+                    out.counts.push(near.len() as u32);
                     let mut k = old_row.start;
                     for &j in &near {
                         let found = match old_of_new {

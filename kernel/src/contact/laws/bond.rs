@@ -27,13 +27,13 @@
 //!   tau   = |F_t| / A + |M_n| R_B / J  > critical_shear_stress,
 //! and never re-forms. No bond damping.
 //!
-//! Reach (how far beyond touching an intact bond can be, so its pair stays in the
-//! neighbour list): a bond forms at a gap below (c - 1)(r_i + r_j) <= (c - 1) 2 r_max, and
-//! F_n accumulates the approach S_n A v_n dt, which is never smaller than the geometric
-//! change in centre distance (the rotation of n only adds stretch). An intact bond has
-//! -F_n <= sigma_c A, so its stretch since forming is at most sigma_c / S_n, and
-//!   reach = (c - 1) 2 r_max + sigma_c / S_n.
-//! A bond stretched beyond that in one step would break in that step anyway.
+//! Reach: a bond forms at a gap below (c - 1)(r_i + r_j) <= (c - 1) 2 r_max, so the
+//! neighbour list must reach that far for `form_bonds` to see the pair:
+//!   reach = (c - 1) 2 r_max.
+//! Once formed, an intact bond keeps its pair in the list however far it stretches (the
+//! simulation's rebuild keeps bonded pairs), so the list does not have to reach the
+//! stretch at break, sigma_c / S_n, which can exceed a particle diameter and would fill the
+//! lists of every pair with partners that never touch.
 //!
 //! Stability: the bond springs S_n A and S_t A must be resolved by the time step (roughly
 //! dt < 0.2 sqrt(m / (S_n A)) for the lightest bonded particle), which the Rayleigh-time
@@ -151,7 +151,7 @@ impl BondLaw for Bond {
     }
 
     fn reach(&self, r_max: f64) -> f64 {
-        (self.contact_ratio - 1.0) * 2.0 * r_max + self.sigma_c / self.s_n
+        (self.contact_ratio - 1.0) * 2.0 * r_max
     }
 
     #[inline]
