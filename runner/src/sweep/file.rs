@@ -4,7 +4,7 @@
 //! format_version = 1
 //! name = "demo"                          # default: the file's stem
 //! [experiment]
-//! scene = "scenes/pile.toml"             # relative to the sweep file
+//! scene = "scenes/pile.toml"             # a scene or an experiment file, relative to this one
 //! threads = 1                            # per run: 1, or 2 for a large run
 //! [design]
 //! type = "plackett_burman"               # see DesignKind
@@ -74,7 +74,10 @@ pub struct FactorSection {
     /// Short name used in tables and JSON (`x1`, `friction`).
     pub name: Spanned<String>,
     /// Where the value goes in the scene: a dotted path, `[k]` or `[name]` to pick from an
-    /// array of tables (`pairs[soil-steel].friction`, `walls[floor].point`).
+    /// array of tables (`pairs[soil-steel].friction`, `walls[floor].point`). When the sweep
+    /// runs an experiment file, the path is into that file (`conditions.moisture_pct`,
+    /// `repose.drop_height`), and `scene:PATH` sets a value in the scene the experiment
+    /// builds (`scene:pairs[soil-soil].rolling_friction`).
     pub target: Spanned<String>,
     /// What it is, for people (`soil-steel restitution`).
     pub label: Option<String>,
