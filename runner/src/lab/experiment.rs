@@ -229,6 +229,12 @@ pub fn rayleigh_time(model: &Model, d: f64) -> Result<f64> {
     Ok(std::f64::consts::PI * 0.5 * d * (rho / g).sqrt() / (0.1631 * nu + 0.8766))
 }
 
+/// The particle diameter of a test: `given`, else 2 mm (the study's class), or 4 mm in the
+/// coarse preset.
+pub fn particle_diameter(c: &Common, given: Option<f64>) -> f64 {
+    given.unwrap_or(if c.coarse { 0.004 } else { 0.002 })
+}
+
 /// Young's modulus of the model's soil, Pa.
 pub fn soil_modulus(model: &Model) -> Result<f64> {
     let soil = model.file.materials.get("soil").and_then(Value::as_table);

@@ -106,7 +106,7 @@ fn positive(key: &str, v: f64, unit: &str) -> Result<f64> {
 pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
     let d = positive(
         "diameter",
-        p.diameter.unwrap_or(if c.coarse { 0.004 } else { 0.002 }),
+        super::experiment::particle_diameter(c, p.diameter),
         "m",
     )?;
     let mass = positive(
@@ -114,20 +114,21 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
         p.mass_g.unwrap_or(if c.coarse { 40.0 } else { 200.0 }),
         "g",
     )?;
-    for (k, v) in [
-        ("drop_height", p.drop_height),
-        ("rate", p.rate),
-        ("funnel_inlet_diameter", p.funnel_inlet_diameter),
-        ("funnel_height", p.funnel_height),
-        ("tray_diameter", p.tray_diameter),
-        ("tray_height", p.tray_height),
-        ("rest_speed", p.rest_speed),
-        ("rest_angle", p.rest_angle),
-        ("rest_time", p.rest_time),
-        ("max_time", p.max_time),
-    ] {
-        positive(k, v, "")?;
-    }
+    super::specimen::check_positive(
+        "repose",
+        &[
+            ("drop_height", p.drop_height),
+            ("rate", p.rate),
+            ("funnel_inlet_diameter", p.funnel_inlet_diameter),
+            ("funnel_height", p.funnel_height),
+            ("tray_diameter", p.tray_diameter),
+            ("tray_height", p.tray_height),
+            ("rest_speed", p.rest_speed),
+            ("rest_angle", p.rest_angle),
+            ("rest_time", p.rest_time),
+            ("max_time", p.max_time),
+        ],
+    )?;
     let outlet = p
         .funnel_outlet_diameter
         .unwrap_or(if c.coarse { 10.0 * d } else { 0.020 });

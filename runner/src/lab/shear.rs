@@ -89,7 +89,7 @@ const UPPER: usize = 2;
 const PLATEN: usize = 3;
 
 pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
-    let d = p.diameter.unwrap_or(if c.coarse { 0.004 } else { 0.002 });
+    let d = super::experiment::particle_diameter(c, p.diameter);
     specimen::check_fit("direct_shear", p.box_diameter, p.height, d)?;
     specimen::check_positive(
         "direct_shear",

@@ -17,6 +17,14 @@ pub fn mean_speed(sim: &Simulation) -> f64 {
     p.velocity.iter().map(|v| v.length()).sum::<f64>() / p.len() as f64
 }
 
+/// The highest particle top, m (0 without particles).
+pub fn top(sim: &Simulation) -> f64 {
+    let p = &sim.particles;
+    (0..p.len())
+        .map(|k| p.position[k].z + p.radius[k])
+        .fold(0.0, f64::max)
+}
+
 /// The inertial number I = gamma_dot d sqrt(rho / p) (GDR MiDi 2004; physics.md):
 /// below about 1e-3 the loading is quasi-static.
 pub fn inertial_number(strain_rate: f64, d: f64, rho: f64, pressure: f64) -> f64 {
@@ -246,11 +254,7 @@ impl Preparation {
                     self.started = sim.time;
                     // Nothing lies between the platen and the loose fill: bring it down to
                     // half a diameter above the highest particle at once instead of driving it.
-                    let p = &sim.particles;
-                    let top = (0..p.len())
-                        .map(|k| p.position[k].z + p.radius[k])
-                        .fold(0.0, f64::max);
-                    let offset = top + 0.5 * self.diameter - self.platen_z;
+                    let offset = top(sim) + 0.5 * self.diameter - self.platen_z;
                     if offset < sim.walls[self.platen].offset.z {
                         sim.walls[self.platen].offset.z = offset;
                     }

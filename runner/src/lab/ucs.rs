@@ -93,7 +93,7 @@ const MOULD: usize = 1;
 const PLATEN: usize = 2;
 
 pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
-    let d = p.diameter.unwrap_or(if c.coarse { 0.004 } else { 0.002 });
+    let d = super::experiment::particle_diameter(c, p.diameter);
     specimen::check_fit("ucs", p.mould_diameter, p.height, d)?;
     specimen::check_positive(
         "ucs",
@@ -241,14 +241,6 @@ impl UcsProtocol {
     fn force(&self, sim: &Simulation) -> f64 {
         sim.walls[PLATEN].force.z
     }
-
-    /// Top of the specimen: the highest particle top, m.
-    fn top(sim: &Simulation) -> f64 {
-        let p = &sim.particles;
-        (0..p.len())
-            .map(|k| p.position[k].z + p.radius[k])
-            .fold(0.0, f64::max)
-    }
 }
 
 impl Protocol for UcsProtocol {
@@ -275,10 +267,10 @@ impl Protocol for UcsProtocol {
                     // The specimen's height is the distance from the base to the platen.
                     self.z0 = sim.walls[PLATEN].offset.z;
                     self.h0 = self.platen_z + self.z0;
-                    if self.h0 < 4.0 * self.d || Self::top(sim) < 0.5 * self.h0 {
+                    if self.h0 < 4.0 * self.d || specimen::top(sim) < 0.5 * self.h0 {
                         bail!(
                             "ucs: the specimen collapsed when the mould was removed (height {:.1} mm, step {}): bonds too weak to stand",
-                            Self::top(sim) * 1e3,
+                            specimen::top(sim) * 1e3,
                             sim.step
                         );
                     }
