@@ -703,6 +703,12 @@ impl Simulation {
                 w.torque += arm.cross(-f);
             }
         }
+        // Each step's force acts for one step (the initial evaluation adds nothing).
+        if kick {
+            for w in &mut self.walls {
+                w.impulse += w.force * self.dt;
+            }
+        }
         failure
     }
 

@@ -37,7 +37,16 @@ impl Axisymmetric {
 
     /// Flat disc of `radius` centred at `centre`, normal to `axis`.
     pub fn disc(centre: DVec3, axis: DVec3, radius: f64) -> Option<Self> {
-        Self::new(centre, axis, DVec2::new(0.0, 0.0), DVec2::new(0.0, radius))
+        Self::annulus(centre, axis, 0.0, radius)
+    }
+
+    /// Flat ring between radii `inner` and `outer` (m) centred at `centre`, normal to
+    /// `axis`: a flange, or a disc with a hole.
+    pub fn annulus(centre: DVec3, axis: DVec3, inner: f64, outer: f64) -> Option<Self> {
+        if !(inner >= 0.0 && outer > inner) {
+            return None;
+        }
+        Self::new(centre, axis, DVec2::new(0.0, inner), DVec2::new(0.0, outer))
     }
 
     /// Open cylinder (no caps) of `radius` from axial position 0 to `length` above `base`.

@@ -83,6 +83,10 @@ pub struct Wall {
     /// in the last step, N and N m.
     pub force: DVec3,
     pub torque: DVec3,
+    /// Time integral of `force` since the start, N s. The force on a wall swings from step
+    /// to step as contacts come and go; the change of impulse over an interval divided by
+    /// its length is the interval's mean force, which a sample every few thousand steps is not.
+    pub impulse: DVec3,
     /// An inactive wall touches nothing (see `Simulation::set_wall_active`).
     pub active: bool,
 }
@@ -102,6 +106,7 @@ impl Wall {
             velocity,
             force: DVec3::ZERO,
             torque: DVec3::ZERO,
+            impulse: DVec3::ZERO,
             active: true,
         }
     }

@@ -87,11 +87,14 @@ impl<'de> Deserialize<'de> for WallSection {
 pub enum ShapeSection {
     /// Infinite plane through `point` (m) with `normal` pointing into the particle side.
     Plane { point: [f64; 3], normal: [f64; 3] },
-    /// Flat disc of `radius` (m) centred at `centre` (m), normal to `axis`.
+    /// Flat disc of `radius` (m) centred at `centre` (m), normal to `axis`; with
+    /// `inner_radius` (m, default 0) a ring with a hole, such as a shear box's flange.
     Disc {
         centre: [f64; 3],
         axis: [f64; 3],
         radius: f64,
+        #[serde(default)]
+        inner_radius: f64,
     },
     /// Open cylinder of `radius` (m) from `base` (m) to `length` (m) along `axis`.
     Cylinder {
@@ -131,6 +134,7 @@ impl ShapeSection {
                 centre,
                 axis,
                 radius,
+                ..
             } => WallShape::Axisymmetric {
                 base: *centre,
                 axis: *axis,
@@ -233,14 +237,26 @@ impl ShapeSection {
                 centre,
                 axis,
                 radius,
-            } => Box::new(
-                Axisymmetric::disc(
-                    check::vec3(&key("centre"), centre)?,
-                    check::direction(&key("axis"), axis)?,
-                    check::positive(&key("radius"), radius, "m")?,
+                inner_radius,
+            } => {
+                let outer = check::positive(&key("radius"), radius, "m")?;
+                let inner = check::non_negative(&key("inner_radius"), inner_radius, "m")?;
+                if inner >= outer {
+                    bail!(
+                        "{} = {inner} m is out of range: allowed [0, radius = {outer}) m",
+                        key("inner_radius")
+                    );
+                }
+                Box::new(
+                    Axisymmetric::annulus(
+                        check::vec3(&key("centre"), centre)?,
+                        check::direction(&key("axis"), axis)?,
+                        inner,
+                        outer,
+                    )
+                    .ok_or_else(bad)?,
                 )
-                .ok_or_else(bad)?,
-            ),
+            }
             ShapeSection::Cylinder {
                 base,
                 axis,

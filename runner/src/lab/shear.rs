@@ -1,11 +1,12 @@
 //! `direct_shear`: the strain-controlled direct shear test (experiments.md).
 //!
 //! A steel split box: a lower ring (fixed, with a bottom) and an upper ring of the specimen's
-//! diameter (61.8 mm; area 3000 mm^2). Particles fill it loosely and settle; a platen
+//! diameter (61.8 mm; area 3000 mm^2), each with a flange at the shear plane. Particles fill it loosely and settle; a platen
 //! compacts them with the study's 12 N, bonds form, the platen servo then holds the normal
 //! pressure, and the upper ring (with the platen riding on it) moves horizontally at
 //! `shear_speed` until `shear_displacement` (5 mm). The shear force is the force of the
-//! particles on the lower box along the shear direction. Loading is sped up only while the
+//! particles on the lower box (ring, bottom and flange) along the shear direction, averaged
+//! over each 2 ms block. Loading is sped up only while the
 //! inertial number I = (v / h) d sqrt(rho / sigma_n) stays below `max_inertial_number`.
 
 use super::experiment::{Built, Common, scene::*, soil_density};
@@ -87,6 +88,12 @@ const LOWER: usize = 0;
 const BOTTOM: usize = 1;
 const UPPER: usize = 2;
 const PLATEN: usize = 3;
+/// The lower ring's top face and the upper ring's bottom face, as wide as the shear
+/// displacement plus two grains: once the rings are offset, soil in the upper ring that
+/// overhangs the lower one rests on the lower flange, and soil in the lower ring that the
+/// upper ring has uncovered is held down by the upper flange, as in a real box.
+const LOWER_FLANGE: usize = 4;
+const UPPER_FLANGE: usize = 5;
 
 pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
@@ -135,12 +142,13 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     let z_mid = 0.5 * p.height;
     let z_fill = 2.4 * p.height / (p.packing / 0.55);
     let z_top = z_fill + 2.0 * d;
+    let flange = r + p.shear_displacement + 2.0 * d;
     let duration = 4.0 * p.max_phase_time + p.shear_displacement / speed + 0.5;
     let scene = t(&[
         ("format_version", Value::Integer(1)),
         (
             "simulation",
-            specimen::simulation(c, dt, duration, r + 0.02, z_top + 0.02),
+            specimen::simulation(c, dt, duration, flange + 0.02, z_top + 0.02),
         ),
         ("materials", materials),
         ("contact", contact),
@@ -152,6 +160,8 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
                 specimen::disc("bottom", 0.0, r),
                 specimen::ring("upper_box", z_mid, z_top, r),
                 specimen::disc("platen", z_top, r - 0.1 * d),
+                specimen::flange("lower_flange", z_mid, r, flange),
+                specimen::flange("upper_flange", z_mid, r, flange),
             ]),
         ),
         (
@@ -175,6 +185,8 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
             x0: 0.0,
             peak: (0.0, 0.0),
             max_i: 0.0,
+            box_force: specimen::MeanForce::new(&[LOWER, BOTTOM, LOWER_FLANGE]),
+            platen_force: specimen::MeanForce::new(&[PLATEN]),
         }),
     })
 }
@@ -203,6 +215,10 @@ struct ShearProtocol {
     /// (displacement, force) at the peak so far.
     peak: (f64, f64),
     max_i: f64,
+    /// Mean forces on the lower box and on the platen since the last control call: the
+    /// block just run (see [`specimen::MeanForce`]).
+    box_force: specimen::MeanForce,
+    platen_force: specimen::MeanForce,
 }
 
 impl ShearProtocol {
@@ -210,14 +226,24 @@ impl ShearProtocol {
         sim.walls[UPPER].offset.x - self.x0
     }
 
+    /// Shear force on the lower box over the last block, N.
     fn shear_force(&self, sim: &Simulation) -> f64 {
-        sim.walls[LOWER].force.x + sim.walls[BOTTOM].force.x
+        self.box_force.mean(sim).x
+    }
+
+    /// Normal force on the platen over the last block, N.
+    fn normal_force(&self, sim: &Simulation) -> f64 {
+        self.platen_force.mean(sim).z
     }
 }
 
 impl Protocol for ShearProtocol {
     fn control(&mut self, sim: &mut Simulation) -> Result<Control> {
         let block = ((0.002 / sim.dt).ceil() as u64).max(1);
+        // Decisions use the forces averaged over the block just run; then a new block starts.
+        let (fx, fz) = (self.shear_force(sim), self.normal_force(sim));
+        self.box_force.mark(sim);
+        self.platen_force.mark(sim);
         match self.phase {
             Phase::Prepare => {
                 if self.prep.advance(sim, "direct_shear")? {
@@ -236,7 +262,7 @@ impl Protocol for ShearProtocol {
             }
             Phase::Load => {
                 let target = self.p.normal_pressure * self.area;
-                let f = sim.walls[PLATEN].force.z;
+                let f = fz;
                 // 3 %: under a constant platen speed the specimen creeps (grains rearrange),
                 // so the servo approaches its target slowly; the reducer reports the normal
                 // stress actually carried during shearing.
@@ -251,6 +277,7 @@ impl Protocol for ShearProtocol {
                     self.x0 = sim.walls[UPPER].offset.x;
                     let v = DVec3::new(self.speed, 0.0, 0.0);
                     sim.walls[UPPER].motion = Motion::Velocity(v);
+                    sim.walls[UPPER_FLANGE].motion = Motion::Velocity(v);
                     sim.walls[PLATEN].motion = Motion::ServoCarried {
                         axis: DVec3::new(0.0, 0.0, -1.0),
                         target_force: target,
@@ -271,18 +298,17 @@ impl Protocol for ShearProtocol {
             }
             Phase::Shear => {
                 let x = self.displacement(sim);
-                let fx = self.shear_force(sim);
                 if fx > self.peak.1 {
                     self.peak = (x, fx);
                 }
-                let sigma = sim.walls[PLATEN].force.z.max(0.0) / self.area;
+                let sigma = fz.max(0.0) / self.area;
                 let i =
                     specimen::inertial_number(self.speed / self.p.height, self.d, self.rho, sigma);
                 if x > 0.1 * self.p.shear_displacement {
                     self.max_i = self.max_i.max(i);
                 }
                 if x >= self.p.shear_displacement {
-                    for k in [UPPER, PLATEN] {
+                    for k in [UPPER, UPPER_FLANGE, PLATEN] {
                         sim.walls[k].motion = Motion::Fixed;
                     }
                     self.phase = Phase::Done;
@@ -299,14 +325,14 @@ impl Protocol for ShearProtocol {
     fn scalars(&self, sim: &Simulation) -> Vec<(String, f64)> {
         let (intact, broken) = sim.bond_counts();
         let mut out = vec![
-            ("normal_force".to_string(), sim.walls[PLATEN].force.z),
+            ("normal_force".to_string(), self.normal_force(sim)),
             ("bonds_intact".to_string(), intact as f64),
             ("bonds_broken".to_string(), broken as f64),
         ];
         // The test's curve: written only while shearing, so that a reducer reads the test,
         // not the preparation.
         if matches!(self.phase, Phase::Shear | Phase::Done) {
-            let sigma = sim.walls[PLATEN].force.z.max(0.0) / self.area;
+            let sigma = self.normal_force(sim).max(0.0) / self.area;
             out.push(("shear_displacement".into(), self.displacement(sim)));
             out.push(("shear_force".into(), self.shear_force(sim)));
             out.push((

@@ -25,6 +25,43 @@ pub fn top(sim: &Simulation) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The mean force on a set of walls since a mark, from their impulses (N): the force on a
+/// wall swings from step to step as contacts open and close, and a sample taken every few
+/// thousand steps can land anywhere in that swing.
+#[derive(Debug, Clone)]
+pub struct MeanForce {
+    walls: Vec<usize>,
+    impulse: DVec3,
+    time: f64,
+}
+
+impl MeanForce {
+    /// Averages the total force on `walls` from the start of the run (zero impulse at t = 0).
+    pub fn new(walls: &[usize]) -> MeanForce {
+        MeanForce {
+            walls: walls.to_vec(),
+            impulse: DVec3::ZERO,
+            time: 0.0,
+        }
+    }
+
+    /// Starts a new interval now.
+    pub fn mark(&mut self, sim: &Simulation) {
+        self.impulse = self.walls.iter().map(|&k| sim.walls[k].impulse).sum();
+        self.time = sim.time;
+    }
+
+    /// The mean total force since the mark; the current force if no time has passed.
+    pub fn mean(&self, sim: &Simulation) -> DVec3 {
+        let span = sim.time - self.time;
+        if span <= 0.0 {
+            return self.walls.iter().map(|&k| sim.walls[k].force).sum();
+        }
+        let now: DVec3 = self.walls.iter().map(|&k| sim.walls[k].impulse).sum();
+        (now - self.impulse) / span
+    }
+}
+
 /// The inertial number I = gamma_dot d sqrt(rho / p) (GDR MiDi 2004; physics.md):
 /// below about 1e-3 the loading is quasi-static.
 pub fn inertial_number(strain_rate: f64, d: f64, rho: f64, pressure: f64) -> f64 {
@@ -122,6 +159,19 @@ pub fn disc(name: &str, z: f64, radius: f64) -> Value {
         ("centre", v3([0.0, 0.0, z])),
         ("axis", v3([0.0, 0.0, 1.0])),
         ("radius", f(radius)),
+        ("material", s("steel")),
+    ])
+}
+
+/// A flat ring of steel between radii `inner` and `outer` at height `z` (a box's flange).
+pub fn flange(name: &str, z: f64, inner: f64, outer: f64) -> Value {
+    t(&[
+        ("name", s(name)),
+        ("type", s("disc")),
+        ("centre", v3([0.0, 0.0, z])),
+        ("axis", v3([0.0, 0.0, 1.0])),
+        ("radius", f(outer)),
+        ("inner_radius", f(inner)),
         ("material", s("steel")),
     ])
 }

@@ -186,6 +186,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
             stop_reason: String::new(),
             platen_z: z_top,
             adaptive: p.speed.is_none(),
+            platen_force: specimen::MeanForce::new(&[PLATEN]),
         }),
     })
 }
@@ -226,6 +227,8 @@ struct UcsProtocol {
     platen_z: f64,
     /// Speed follows the stress (see [`UcsParams::speed`]).
     adaptive: bool,
+    /// Mean force on the platen since the last control call (the block just run).
+    platen_force: specimen::MeanForce,
 }
 
 impl UcsProtocol {
@@ -237,15 +240,18 @@ impl UcsProtocol {
         }
     }
 
-    /// Axial force, positive in compression, N.
+    /// Axial force over the last block, positive in compression, N.
     fn force(&self, sim: &Simulation) -> f64 {
-        sim.walls[PLATEN].force.z
+        self.platen_force.mean(sim).z
     }
 }
 
 impl Protocol for UcsProtocol {
     fn control(&mut self, sim: &mut Simulation) -> Result<Control> {
         let block = ((0.002 / sim.dt).ceil() as u64).max(1);
+        // Decisions use the force averaged over the block just run; then a new block starts.
+        let f_mean = self.force(sim);
+        self.platen_force.mark(sim);
         match self.phase {
             Phase::Prepare => {
                 if self.prep.advance(sim, "ucs")? {
@@ -287,7 +293,7 @@ impl Protocol for UcsProtocol {
             }
             Phase::Compress => {
                 let eps = self.strain(sim);
-                let f = self.force(sim);
+                let f = f_mean;
                 let ac = self.area / (1.0 - eps).max(1e-6);
                 let sigma = f / ac;
                 if sigma > self.peak.stress {

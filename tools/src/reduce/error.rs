@@ -5,25 +5,23 @@ use thiserror::Error;
 /// A run that cannot be reduced. Each message is one sentence that names the file (or the
 /// part of the analysis) and what is wrong with it, so it can be shown to the user as is.
 ///
+/// The causes are part of each message, not error sources, so that a chain printer
+/// (anyhow's `{:#}`) does not print them twice.
+///
 /// A truncated file is *not* an error: it is read up to its last complete chunk and the
 /// result says `complete: false` (see [`super::Completeness`]).
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum ReduceError {
     /// The file cannot be opened or read.
-    #[error("{file}: cannot read: {source}")]
-    Io {
-        file: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{file}: cannot read: {cause}")]
+    Io { file: String, cause: std::io::Error },
 
     /// The file does not start like an MCAP file (nothing in it can be read).
-    #[error("{file}: not an MCAP file: {source}")]
+    #[error("{file}: not an MCAP file: {cause}")]
     NotMcap {
         file: String,
-        #[source]
-        source: mcap::McapError,
+        cause: mcap::McapError,
     },
 
     /// A channel this reducer reads carries another schema than the contract says.
@@ -36,12 +34,11 @@ pub enum ReduceError {
     },
 
     /// A message that does not decode as its schema.
-    #[error("{file}: topic {topic}: cannot decode a message: {source}")]
+    #[error("{file}: topic {topic}: cannot decode a message: {cause}")]
     Decode {
         file: String,
         topic: String,
-        #[source]
-        source: prost::DecodeError,
+        cause: prost::DecodeError,
     },
 
     /// A point cloud whose fields or data do not match the `/particles` layout.
@@ -94,11 +91,10 @@ pub enum ReduceError {
     Plot { what: String, problem: String },
 
     /// An analysis error, with the file it came from.
-    #[error("{file}: {source}")]
+    #[error("{file}: {inner}")]
     InFile {
         file: String,
-        #[source]
-        source: Box<ReduceError>,
+        inner: Box<ReduceError>,
     },
 }
 
@@ -110,7 +106,7 @@ impl ReduceError {
             | ReduceError::Degenerate(_)
             | ReduceError::Plot { .. }) => ReduceError::InFile {
                 file: file.to_string(),
-                source: Box::new(e),
+                inner: Box::new(e),
             },
             e => e,
         }

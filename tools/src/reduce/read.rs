@@ -202,9 +202,9 @@ enum Kind {
 pub fn read_run(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Run, ReduceError> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let io = |source| ReduceError::Io {
+    let io = |cause| ReduceError::Io {
         file: file.clone(),
-        source,
+        cause,
     };
     let mut f = File::open(path).map_err(io)?;
     let size = f.metadata().map_err(io)?.len();
@@ -240,7 +240,10 @@ pub fn read_run(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Run, Re
         let event = match event {
             Ok(e) => e,
             Err(source) if !seen_header => {
-                return Err(ReduceError::NotMcap { file, source });
+                return Err(ReduceError::NotMcap {
+                    file,
+                    cause: source,
+                });
             }
             Err(e) => {
                 broken = Some(e.to_string());
@@ -258,7 +261,7 @@ pub fn read_run(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Run, Re
         };
         let record = match mcap::parse_record(opcode, data) {
             Ok(r) => r,
-            Err(source) if !seen_header => return Err(ReduceError::NotMcap { file, source }),
+            Err(cause) if !seen_header => return Err(ReduceError::NotMcap { file, cause }),
             Err(e) => {
                 broken = Some(e.to_string());
                 break;
@@ -283,10 +286,10 @@ pub fn read_run(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Run, Re
                 match channels.get(&header.channel_id) {
                     Some(Kind::Scalar(name)) => {
                         let v =
-                            Vector3::decode(&data[..]).map_err(|source| ReduceError::Decode {
+                            Vector3::decode(&data[..]).map_err(|cause| ReduceError::Decode {
                                 file: file.clone(),
                                 topic: format!("{SCALARS}{name}"),
-                                source,
+                                cause,
                             })?;
                         let s = run.scalars.entry(name.clone()).or_default();
                         s.time_s.push(seconds(t));
@@ -339,10 +342,10 @@ pub fn read_run(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Run, Re
     }
 
     if let Some((t, bytes)) = chosen {
-        let msg = PointCloud::decode(&bytes[..]).map_err(|source| ReduceError::Decode {
+        let msg = PointCloud::decode(&bytes[..]).map_err(|cause| ReduceError::Decode {
             file: file.clone(),
             topic: PARTICLES.to_string(),
-            source,
+            cause,
         })?;
         let cloud = ParticleCloud::from_point_cloud(&msg, seconds(t))
             .map_err(|problem| ReduceError::CloudLayout { file, problem })?;
