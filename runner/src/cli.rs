@@ -1,6 +1,6 @@
 //! The command-line surface.
 
-use crate::commands::{bench, compare, laws, reduce, run, sweep};
+use crate::commands::{bench, compare, laws, reduce, rsm, run, sweep};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -28,6 +28,11 @@ pub enum Command {
     Reduce(reduce::ReduceArgs),
     /// Simulate every measured condition of a data file and compare (compare.json/csv/md).
     Compare(compare::CompareArgs),
+    /// Response surfaces on tables of runs: fit with ANOVA, solve for targets, steepest ascent.
+    Rsm {
+        #[command(subcommand)]
+        command: rsm::RsmCommand,
+    },
     /// Speed benchmarks.
     Bench {
         #[command(subcommand)]
@@ -44,5 +49,6 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Sweep { command } => sweep::sweep(&command, out),
         Command::Reduce(args) => reduce::reduce_cmd(&args, out),
         Command::Compare(args) => compare::compare(&args, out),
+        Command::Rsm { command } => rsm::rsm(&command, out),
     }
 }

@@ -3,3 +3,4 @@
 
 pub mod design;
 pub mod reduce;
+pub mod rsm;

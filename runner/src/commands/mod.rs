@@ -5,5 +5,7 @@ pub mod compare;
 pub mod laws;
 pub mod reduce;
 pub mod report;
+pub mod rsm;
+pub mod rsm_print;
 pub mod run;
 pub mod sweep;

@@ -1,0 +1,200 @@
+//! `tilth rsm fit|solve|path`: response surfaces on tables of runs (the work is in
+//! `tilth_tools::rsm`).
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+use std::io::Write;
+use std::path::PathBuf;
+use tilth_tools::rsm::{self, Anova, Data, FitOptions, Order, Table};
+
+#[derive(Debug, Subcommand)]
+pub enum RsmCommand {
+    /// Fit a linear, 2FI or quadratic model and print its ANOVA (Type III), R^2, adjusted
+    /// and predicted R^2, adequate precision, and the equation in coded and real units.
+    Fit(FitArgs),
+}
+
+/// Which runs and which model.
+#[derive(Debug, Args)]
+pub struct ModelArgs {
+    /// Table of runs (CSV with a header): a sweep's results.csv or a study's table.
+    pub csv: PathBuf,
+    /// Response column.
+    #[arg(long)]
+    pub response: String,
+    /// Factor columns, comma-separated (names are kept in the output).
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub factors: Vec<String>,
+    /// linear, 2fi or quadratic.
+    #[arg(long, default_value = "linear")]
+    pub model: String,
+    /// Real levels coded -1 and +1, e.g. `x4=0.25:0.65,x6=0.15:0.35` (default: each factor's
+    /// smallest and largest value in the table).
+    #[arg(long, value_delimiter = ',')]
+    pub ranges: Vec<String>,
+    /// The factor columns hold coded values (-1..+1) whose real levels are these, e.g.
+    /// `x4=0.25:0.65,...`: the equation in real units uses them.
+    #[arg(long, value_delimiter = ',', conflicts_with = "ranges")]
+    pub levels: Vec<String>,
+    /// Names for the factors in the output, in the order of --factors (default: the
+    /// column names).
+    #[arg(long, value_delimiter = ',')]
+    pub names: Vec<String>,
+    /// Only rows where a column has a value, e.g. `moisture_pct=6` (repeatable).
+    #[arg(long = "where")]
+    pub filters: Vec<String>,
+    /// Add the centre points' curvature term (screening designs).
+    #[arg(long = "centre-curvature", alias = "center-curvature")]
+    pub curvature: bool,
+    /// Backward elimination of terms with p above ALPHA (default 0.1), keeping hierarchy.
+    #[arg(long, num_args = 0..=1, default_missing_value = "0.1")]
+    pub backward: Option<f64>,
+}
+
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// A published ANOVA table to check against (CSV with a `source` column).
+    #[arg(long)]
+    pub reported: Option<PathBuf>,
+    /// The column of `--reported` that holds this response's p-values (one column per
+    /// response, as in a per-moisture table).
+    #[arg(long = "reported-column")]
+    pub reported_column: Option<String>,
+    /// One JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn rsm(cmd: &RsmCommand, out: &mut dyn Write) -> Result<()> {
+    match cmd {
+        RsmCommand::Fit(a) => fit(a, out),
+    }
+}
+
+/// Reads, filters and fits what `m` asks for.
+pub fn load_and_fit(m: &ModelArgs) -> Result<(Data, Anova)> {
+    let (data, options) = prepare(m)?;
+    let anova = rsm::fit(&data, options)?;
+    Ok((data, anova))
+}
+
+/// The runs and the fit options `m` asks for.
+pub fn prepare(m: &ModelArgs) -> Result<(Data, FitOptions)> {
+    let data = load(m)?;
+    let order = Order::parse(&m.model).with_context(|| {
+        format!(
+            "--model {:?} is not a model: allowed linear, 2fi, quadratic",
+            m.model
+        )
+    })?;
+    if let Some(a) = m.backward {
+        if !(a > 0.0 && a < 1.0) {
+            bail!("--backward {a} is out of range: allowed (0, 1)");
+        }
+    }
+    Ok((
+        data,
+        FitOptions {
+            order,
+            curvature: m.curvature,
+            backward: m.backward,
+        },
+    ))
+}
+
+fn load(m: &ModelArgs) -> Result<Data> {
+    let mut table = Table::read(&m.csv)?;
+    for f in &m.filters {
+        let (col, value) = f
+            .split_once('=')
+            .with_context(|| format!("--where {f:?}: expected COLUMN=VALUE"))?;
+        let cells = table.text(col.trim())?;
+        let want = value.trim();
+        let keep: Vec<bool> = cells
+            .iter()
+            .map(|c| {
+                c == want
+                    || matches!((c.parse::<f64>(), want.parse::<f64>()), (Ok(a), Ok(b)) if a == b)
+            })
+            .collect();
+        table = table.filter(&keep);
+        if table.rows.is_empty() {
+            bail!("{}: no row has {col} = {want}", m.csv.display());
+        }
+    }
+    let ranges = parse_ranges(&m.ranges, &m.factors, "--ranges")?;
+    let mut data = Data::from_table(&table, &m.factors, &m.response, ranges.as_deref())?;
+    if let Some(levels) = parse_ranges(&m.levels, &m.factors, "--levels")? {
+        data = data.from_coded(&levels);
+    }
+    if !m.names.is_empty() {
+        data = data.renamed(&m.names)?;
+    }
+    Ok(data)
+}
+
+fn parse_ranges(
+    list: &[String],
+    factors: &[String],
+    flag: &str,
+) -> Result<Option<Vec<(f64, f64)>>> {
+    if list.is_empty() {
+        return Ok(None);
+    }
+    let mut out = vec![None; factors.len()];
+    for item in list {
+        let (name, range) = item
+            .split_once('=')
+            .with_context(|| format!("{flag} {item:?}: expected FACTOR=LOW:HIGH"))?;
+        let k = factors
+            .iter()
+            .position(|f| f == name.trim())
+            .with_context(|| format!("{flag} {item:?}: {name} is not one of --factors"))?;
+        let (lo, hi) = range
+            .split_once(':')
+            .with_context(|| format!("{flag} {item:?}: expected FACTOR=LOW:HIGH"))?;
+        let parse = |s: &str| {
+            s.trim()
+                .parse::<f64>()
+                .with_context(|| format!("{flag} {item:?}: {s:?} is not a number"))
+        };
+        out[k] = Some((parse(lo)?, parse(hi)?));
+    }
+    out.into_iter()
+        .zip(factors)
+        .map(|(r, f)| {
+            r.with_context(|| format!("{flag}: no range for factor {f} (give all or none)"))
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(Some)
+}
+
+fn fit(a: &FitArgs, out: &mut dyn Write) -> Result<()> {
+    let (data, options) = prepare(&a.model)?;
+    let anova = rsm::fit(&data, options)?;
+    let checks = match &a.reported {
+        Some(p) => Some(rsm::compare_reported(
+            &anova,
+            &data,
+            options,
+            &Table::read(p)?,
+            a.reported_column.as_deref(),
+        )?),
+        None => None,
+    };
+    if a.json {
+        let mut v = serde_json::to_value(&anova)?;
+        if let Some(c) = &checks {
+            v["reported_check"] = serde_json::to_value(c)?;
+        }
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        return Ok(());
+    }
+    super::rsm_print::anova(&anova, out)?;
+    if let (Some(c), Some(p)) = (&checks, &a.reported) {
+        super::rsm_print::checks(c, &p.display().to_string(), out)?;
+    }
+    Ok(())
+}
