@@ -6,6 +6,7 @@ pub mod laws;
 pub mod reduce;
 pub mod report;
 pub mod rsm;
+pub mod rsm_plot;
 pub mod rsm_print;
 pub mod run;
 pub mod sweep;

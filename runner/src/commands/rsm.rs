@@ -12,6 +12,9 @@ pub enum RsmCommand {
     /// Fit a linear, 2FI or quadratic model and print its ANOVA (Type III), R^2, adjusted
     /// and predicted R^2, adequate precision, and the equation in coded and real units.
     Fit(FitArgs),
+    /// Every setting whose predicted response hits a target (one per condition): a ridge
+    /// when one target cannot separate the factors, and a statement saying so.
+    Solve(SolveArgs),
 }
 
 /// Which runs and which model.
@@ -62,7 +65,30 @@ pub struct FitArgs {
     /// response, as in a per-moisture table).
     #[arg(long = "reported-column")]
     pub reported_column: Option<String>,
+    /// Write Pareto, main-effects and predicted-vs-actual SVGs here.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
     /// One JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Targets, as VALUE or LABEL=VALUE, comma-separated or repeated (e.g. `3%=32.76,6%=35.53`).
+    #[arg(long = "target", value_delimiter = ',', required = true)]
+    pub targets: Vec<String>,
+    /// Hold factors at real values, e.g. `x4=0.45` (repeatable or comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub fix: Vec<String>,
+    /// Settings to print per target (evenly spaced along the solutions; JSON has them all).
+    #[arg(long, default_value_t = 11)]
+    pub show: usize,
+    /// Draw each target's contour plot here (two free factors).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
 }
@@ -70,7 +96,82 @@ pub struct FitArgs {
 pub fn rsm(cmd: &RsmCommand, out: &mut dyn Write) -> Result<()> {
     match cmd {
         RsmCommand::Fit(a) => fit(a, out),
+        RsmCommand::Solve(a) => solve(a, out),
     }
+}
+
+/// `LABEL=VALUE` or `VALUE`.
+fn labelled(item: &str, what: &str) -> Result<(String, f64)> {
+    let (label, value) = match item.rsplit_once('=') {
+        Some((l, v)) => (l.trim().to_string(), v.trim()),
+        None => (item.trim().to_string(), item.trim()),
+    };
+    let v: f64 = value
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite())
+        .with_context(|| format!("{what} {item:?}: {value:?} is not a number"))?;
+    Ok((label, v))
+}
+
+fn solve(a: &SolveArgs, out: &mut dyn Write) -> Result<()> {
+    let (_, anova) = load_and_fit(&a.model)?;
+    let mut fixed = Vec::new();
+    for f in &a.fix {
+        let (name, v) = labelled(f, "--fix")?;
+        let k = anova
+            .factors
+            .iter()
+            .position(|n| *n == name)
+            .with_context(|| {
+                format!(
+                    "--fix {f:?}: {name} is not a factor (factors: {})",
+                    anova.factors.join(", ")
+                )
+            })?;
+        let (lo, hi) = (anova.coding.low[k], anova.coding.high[k]);
+        if !(lo.min(hi)..=lo.max(hi)).contains(&v) {
+            bail!("--fix {f:?}: {v} is outside the design's range of {name}, allowed [{lo}, {hi}]");
+        }
+        fixed.push((k, v));
+    }
+    let mut solutions = Vec::new();
+    for t in &a.targets {
+        let (label, value) = labelled(t, "--target")?;
+        solutions.push(rsm::solve(&anova, &label, value, &fixed)?);
+    }
+    if let Some(dir) = &a.plot {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create", dir.display()))?;
+        for s in &solutions {
+            if let Some(path) = super::rsm_plot::contour(&anova, s, &fixed, dir)? {
+                eprintln!("plot {}", path.display());
+            }
+        }
+    }
+    if a.json {
+        let v = serde_json::json!({
+            "response": anova.response,
+            "factors": anova.factors,
+            "fixed": fixed.iter().map(|(k, v)| (anova.factors[*k].clone(), *v)).collect::<Vec<_>>(),
+            "r2": anova.r2,
+            "solutions": solutions,
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        return Ok(());
+    }
+    writeln!(out, "{}", anova.equation_real)?;
+    writeln!(
+        out,
+        "(R^2 {:.4}, adjusted {:.4}, {} runs)",
+        anova.r2,
+        anova.adj_r2.unwrap_or(f64::NAN),
+        anova.runs
+    )?;
+    for s in &solutions {
+        super::rsm_print::solution(&anova, s, a.show, out)?;
+    }
+    Ok(())
 }
 
 /// Reads, filters and fits what `m` asks for.
@@ -184,6 +285,13 @@ fn fit(a: &FitArgs, out: &mut dyn Write) -> Result<()> {
         )?),
         None => None,
     };
+    if let Some(dir) = &a.plot {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create", dir.display()))?;
+        for p in super::rsm_plot::fit(&anova, dir)? {
+            eprintln!("plot {}", p.display());
+        }
+    }
     if a.json {
         let mut v = serde_json::to_value(&anova)?;
         if let Some(c) = &checks {

@@ -1,7 +1,7 @@
 //! The text form of `tilth rsm` results: Design-Expert's ANOVA layout.
 
 use std::io::Write;
-use tilth_tools::rsm::{Anova, Check, SourceRow};
+use tilth_tools::rsm::{Anova, Check, Solution, SourceRow};
 
 fn opt(v: Option<f64>, digits: usize) -> String {
     v.map_or("-".into(), |v| format!("{v:.digits$}"))
@@ -199,4 +199,32 @@ fn short(v: f64) -> String {
     }
     let digits = (4 - v.abs().log10().floor() as i32).clamp(0, 10) as usize;
     format!("{v:.digits$}")
+}
+
+/// One target's solutions: a sample of the settings, the extent, the statement.
+pub fn solution(a: &Anova, s: &Solution, show: usize, out: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(out, "\n{} = {} ({})", a.response, s.target, s.label)?;
+    if !s.settings.is_empty() {
+        write!(out, "  ")?;
+        for f in &a.factors {
+            write!(out, "{f:>12}")?;
+        }
+        writeln!(out, "{:>14}", "predicted")?;
+        let n = s.settings.len();
+        let picks: Vec<usize> = if n <= show || show < 2 {
+            (0..n).collect()
+        } else {
+            (0..show).map(|k| k * (n - 1) / (show - 1)).collect()
+        };
+        for k in picks {
+            let st = &s.settings[k];
+            write!(out, "  ")?;
+            for v in &st.values {
+                write!(out, "{v:>12.5}")?;
+            }
+            writeln!(out, "{:>14.4}", st.predicted)?;
+        }
+    }
+    writeln!(out, "  {}", s.statement)?;
+    Ok(())
 }

@@ -4,6 +4,7 @@ mod config_files;
 mod end_to_end;
 mod experiments;
 mod external;
+mod rsm;
 mod sweeps;
 
 use std::path::PathBuf;

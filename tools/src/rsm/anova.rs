@@ -97,8 +97,19 @@ pub struct Anova {
     pub removed: Vec<(String, f64)>,
     /// Things the reader should know (no pure error, a low predicted R^2...).
     pub notes: Vec<String>,
+    /// Per run: actual, predicted, residual, leverage (Design-Expert's diagnostics table).
+    pub diagnostics: Vec<RunDiagnostic>,
     #[serde(skip)]
     pub(crate) fit: FitState,
+}
+
+/// One run's fit.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunDiagnostic {
+    pub actual: f64,
+    pub predicted: f64,
+    pub residual: f64,
+    pub leverage: f64,
 }
 
 /// What prediction needs.
@@ -435,6 +446,17 @@ fn analyse(
         cv_pct,
         removed,
         notes,
+        diagnostics: y
+            .iter()
+            .zip(&full.fitted)
+            .zip(&full.leverage)
+            .map(|((a, f), h)| RunDiagnostic {
+                actual: *a,
+                predicted: *f,
+                residual: a - f,
+                leverage: *h,
+            })
+            .collect(),
         fit: state,
     })
 }

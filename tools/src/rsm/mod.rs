@@ -7,6 +7,8 @@
 //!   [`Anova`]: Type III sums of squares, F and p per term, curvature, lack of fit, R^2,
 //!   adjusted and predicted R^2, adequate precision, the equation in coded and real units,
 //!   with optional backward elimination.
+//! - [`solve`] traces every setting that hits a target (a ridge when the target cannot
+//!   separate the factors) and says so.
 //! - [`compare_reported`] checks a fit against a published ANOVA table, value by value.
 
 mod anova;
@@ -15,15 +17,18 @@ mod data;
 mod equation;
 mod error;
 mod ols;
+pub mod plot;
 mod reported;
+mod solve;
 mod table;
 mod terms;
 
-pub use anova::{Anova, FitOptions, SourceRow, TermRow, fit};
+pub use anova::{Anova, FitOptions, RunDiagnostic, SourceRow, TermRow, fit};
 pub use coding::Coding;
 pub use data::Data;
 pub use equation::format as format_equation;
 pub use error::RsmError;
 pub use reported::{Check, compare_reported};
+pub use solve::{Setting, Solution, solve};
 pub use table::Table;
 pub use terms::{Order, Term, canonical};

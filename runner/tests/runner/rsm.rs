@@ -1,0 +1,195 @@
+//! `tilth rsm` from the command line: the JSON contract, the published-table check, solving
+//! and its pictures, and refusals.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn tilth(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tilth"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .unwrap()
+}
+
+const T6: &str = "sweeps/li2022/data/table06_pb_runs.csv";
+const T7: &str = "sweeps/li2022/data/table07_pb_anova_reported.csv";
+const T9: &str = "sweeps/li2022/data/table09_bbd_runs.csv";
+
+#[test]
+fn fit_json_has_the_documented_keys() {
+    let out = tilth(&[
+        "rsm",
+        "fit",
+        T6,
+        "--response",
+        "repose_angle_deg",
+        "--factors",
+        "x1,x2,x3,x4,x5,x6,x7",
+        "--model",
+        "linear",
+        "--centre-curvature",
+        "--json",
+        "--reported",
+        T7,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let terms = v["terms"].as_array().unwrap();
+    assert_eq!(terms.len(), 8);
+    for t in terms {
+        for key in ["name", "coefficient", "sum_sq", "df", "f", "p"] {
+            assert!(!t[key].is_null(), "term {t} lacks {key}");
+        }
+    }
+    assert_eq!(terms[3]["name"], "x4");
+    for key in ["r2", "adj_r2", "pred_r2", "adeq_precision"] {
+        assert!(v[key].is_f64(), "{key}");
+    }
+    assert!(v["lack_of_fit"]["f"].is_f64() && v["lack_of_fit"]["p"].is_f64());
+    assert!(v["curvature"]["sum_sq"].is_f64() && v["curvature"]["p"].is_f64());
+    let bad: Vec<String> = v["reported_check"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["agrees"] == false)
+        .map(|c| {
+            format!(
+                "{} {}",
+                c["source"].as_str().unwrap(),
+                c["field"].as_str().unwrap()
+            )
+        })
+        .collect();
+    assert_eq!(bad, ["x4 p"]);
+}
+
+#[test]
+fn fit_text_shows_the_x4_discrepancy() {
+    let out = tilth(&[
+        "rsm",
+        "fit",
+        T6,
+        "--response",
+        "repose_angle_deg",
+        "--factors",
+        "x1,x2,x3,x4,x5,x6,x7",
+        "--centre-curvature",
+        "--reported",
+        T7,
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    assert!(text.contains("45 of 46 reported values agree"), "{text}");
+    assert!(
+        text.contains("DIFFERS: x4 p: the source prints 0.007, its data give 0.0022"),
+        "{text}"
+    );
+}
+
+#[test]
+fn solve_states_the_ridge_and_draws_it() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-solve");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = tilth(&[
+        "rsm",
+        "solve",
+        T9,
+        "--response",
+        "repose_angle_deg",
+        "--factors",
+        "x4_coded,x6_coded,x7_coded",
+        "--names",
+        "x4,x6,x7",
+        "--levels",
+        "x4_coded=0.25:0.65,x6_coded=0.15:0.35,x7_coded=0.125:0.625",
+        "--model",
+        "quadratic",
+        "--fix",
+        "x4=0.45",
+        "--target",
+        "3%=32.76,6%=35.53,9%=37.89,12%=43.87",
+        "--plot",
+        dir.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        text.matches("one target cannot separate x6 and x7").count(),
+        4,
+        "{text}"
+    );
+    for m in ["3_", "6_", "9_", "12_"] {
+        let svg =
+            std::fs::read_to_string(dir.join(format!("contour-repose_angle_deg-{m}.svg"))).unwrap();
+        assert!(svg.contains("<svg") && svg.contains("x7"));
+    }
+}
+
+#[test]
+fn refusals_name_the_problem() {
+    let out = tilth(&[
+        "rsm",
+        "fit",
+        T9,
+        "--response",
+        "err_6pct",
+        "--factors",
+        "x6_coded,x7_coded",
+        "--model",
+        "quadratic",
+        "--where",
+        "x4_coded=0",
+    ]);
+    assert!(!out.status.success());
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("6 runs are too few for the quadratic model of 2 factors")
+            && e.contains("at least 7"),
+        "{e}"
+    );
+    let out = tilth(&[
+        "rsm",
+        "fit",
+        T9,
+        "--response",
+        "err_6pct",
+        "--factors",
+        "x4_coded",
+        "--model",
+        "cubic",
+    ]);
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("--model \"cubic\" is not a model: allowed linear, 2fi, quadratic"),
+        "{e}"
+    );
+    let out = tilth(&[
+        "rsm",
+        "solve",
+        T9,
+        "--response",
+        "repose_angle_deg",
+        "--factors",
+        "x4_coded,x6_coded,x7_coded",
+        "--model",
+        "quadratic",
+        "--fix",
+        "x4_coded=3",
+        "--target",
+        "35",
+    ]);
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("outside the design's range of x4_coded, allowed [-1, 1]"),
+        "{e}"
+    );
+}
