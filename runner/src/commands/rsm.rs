@@ -15,6 +15,51 @@ pub enum RsmCommand {
     /// Every setting whose predicted response hits a target (one per condition): a ridge
     /// when one target cannot separate the factors, and a statement saying so.
     Solve(SolveArgs),
+    /// The path of steepest ascent (or descent) from a first-order fit, as a table and as the
+    /// `[design]` block of a sweep file.
+    Path(PathArgs),
+    /// The best run of a path that was run (closest to the targets) and the next design's
+    /// ranges around it.
+    Next(NextArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PathArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Factors on the path (default: those whose first-order p-value is below 0.05).
+    #[arg(long, value_delimiter = ',')]
+    pub on: Vec<String>,
+    /// Coded step of the leading factor per point.
+    #[arg(long, default_value_t = 1.0)]
+    pub step: f64,
+    /// Points on the path, the centre included.
+    #[arg(long, default_value_t = 6)]
+    pub steps: usize,
+    /// Descend instead (to minimise the response).
+    #[arg(long)]
+    pub descent: bool,
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct NextArgs {
+    /// The path's results (CSV), rows in path order.
+    pub csv: PathBuf,
+    #[arg(long)]
+    pub response: String,
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub factors: Vec<String>,
+    /// Targets (VALUE or LABEL=VALUE): the best run minimises the sum of squared relative
+    /// misses over them; without targets, the largest response is best.
+    #[arg(long = "target", value_delimiter = ',')]
+    pub targets: Vec<String>,
+    /// Rows on each side of the best one that set the next ranges (the study used 2).
+    #[arg(long, default_value_t = 1)]
+    pub neighbours: usize,
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Which runs and which model.
@@ -97,7 +142,101 @@ pub fn rsm(cmd: &RsmCommand, out: &mut dyn Write) -> Result<()> {
     match cmd {
         RsmCommand::Fit(a) => fit(a, out),
         RsmCommand::Solve(a) => solve(a, out),
+        RsmCommand::Path(a) => path(a, out),
+        RsmCommand::Next(a) => next(a, out),
     }
+}
+
+fn path(a: &PathArgs, out: &mut dyn Write) -> Result<()> {
+    let (_, anova) = load_and_fit(&a.model)?;
+    let on: Vec<usize> = if a.on.is_empty() {
+        anova
+            .terms
+            .iter()
+            .filter(|t| t.p.is_some_and(|p| p < 0.05))
+            .filter_map(|t| anova.factors.iter().position(|f| *f == t.name))
+            .collect()
+    } else {
+        a.on.iter()
+            .map(|n| {
+                anova.factors.iter().position(|f| f == n).with_context(|| {
+                    format!(
+                        "--on {n}: not a factor (factors: {})",
+                        anova.factors.join(", ")
+                    )
+                })
+            })
+            .collect::<Result<_>>()?
+    };
+    if on.is_empty() {
+        bail!("no first-order term has p < 0.05: name the factors of the path with --on");
+    }
+    let p = rsm::steepest_path(&anova, &on, a.step, a.steps, a.descent)?;
+    if a.json {
+        writeln!(out, "{}", serde_json::to_string_pretty(&p)?)?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "path of steepest {} along {} (coded direction {}), step {} coded units of the leading factor",
+        if a.descent { "descent" } else { "ascent" },
+        p.factors.join(", "),
+        p.direction
+            .iter()
+            .map(|d| format!("{d:.4}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        p.step
+    )?;
+    write!(out, "{:>5}", "point")?;
+    for f in &anova.factors {
+        write!(out, "{f:>12}")?;
+    }
+    writeln!(out, "{:>14}", "predicted")?;
+    for (k, (x, y)) in p.real.iter().zip(&p.predicted).enumerate() {
+        write!(out, "{:>5}", k + 1)?;
+        for v in x {
+            write!(out, "{v:>12.5}")?;
+        }
+        writeln!(out, "{y:>14.4}")?;
+    }
+    writeln!(
+        out,
+        "\n# the same path as a sweep design (factors keep their low/high of the fit):"
+    )?;
+    writeln!(out, "[design]\ntype = \"steepest_ascent\"")?;
+    let table = |v: &[f64]| {
+        p.factors
+            .iter()
+            .zip(v)
+            .map(|(f, d)| format!("{f} = {d}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    writeln!(out, "direction = {{ {} }}", table(&p.direction))?;
+    writeln!(out, "origin = {{ {} }}", table(&vec![0.0; p.factors.len()]))?;
+    writeln!(out, "step = {}\nsteps = {}", p.step, a.steps)?;
+    writeln!(
+        out,
+        "\nnote: predictions along the path leave the fitted region; run the path, then `tilth rsm next` on its results"
+    )?;
+    Ok(())
+}
+
+fn next(a: &NextArgs, out: &mut dyn Write) -> Result<()> {
+    let table = Table::read(&a.csv)?;
+    let targets: Vec<f64> = a
+        .targets
+        .iter()
+        .map(|t| labelled(t, "--target").map(|x| x.1))
+        .collect::<Result<_>>()?;
+    let r = rsm::next_region(&table, &a.factors, &a.response, &targets, a.neighbours)?;
+    if a.json {
+        writeln!(out, "{}", serde_json::to_string_pretty(&r)?)?;
+    } else {
+        writeln!(out, "{}", r.statement)?;
+    }
+    Ok(())
 }
 
 /// `LABEL=VALUE` or `VALUE`.

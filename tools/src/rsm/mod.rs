@@ -9,6 +9,7 @@
 //!   with optional backward elimination.
 //! - [`solve`] traces every setting that hits a target (a ridge when the target cannot
 //!   separate the factors) and says so.
+//! - [`steepest_path`] and [`next_region`] lead from a screening fit to the next design.
 //! - [`compare_reported`] checks a fit against a published ANOVA table, value by value.
 
 mod anova;
@@ -17,6 +18,7 @@ mod data;
 mod equation;
 mod error;
 mod ols;
+mod path;
 pub mod plot;
 mod reported;
 mod solve;
@@ -28,6 +30,7 @@ pub use coding::Coding;
 pub use data::Data;
 pub use equation::format as format_equation;
 pub use error::RsmError;
+pub use path::{NextRegion, SteepestPath, next_region, steepest_path};
 pub use reported::{Check, compare_reported};
 pub use solve::{Setting, Solution, solve};
 pub use table::Table;

@@ -184,3 +184,46 @@ fn backward_elimination_keeps_x4_x6_x7() {
     assert_eq!(a.removed.len(), 4);
     assert!(a.removed.iter().all(|(_, p)| *p > 0.1));
 }
+
+/// Table 8's path, scored against the four moistures' measured angles (table 1), gives the
+/// study's Box-Behnken ranges (table 9's levels) with two rows either side of the best run.
+#[test]
+fn table8_path_leads_to_table9_ranges() {
+    use tilth_tools::rsm::next_region;
+    let path = Table::read(study("table08_steepest_ascent.csv")).unwrap();
+    let measured = Table::read(study("table01_friction_repose.csv")).unwrap();
+    let targets = measured.numbers("repose_angle_deg").unwrap();
+    let factors = strings(&["x4", "x6", "x7"]);
+    let r = next_region(&path, &factors, "repose_angle_deg", &targets, 2).unwrap();
+    assert_eq!(r.best_row, 3, "run 4 of table 8");
+    let levels = Table::read(study("table09_bbd_levels.csv")).unwrap();
+    let (lo, mid, hi) = (
+        levels.numbers("minus1").unwrap(),
+        levels.numbers("zero").unwrap(),
+        levels.numbers("plus1").unwrap(),
+    );
+    for k in 0..3 {
+        assert!((r.low[k] - lo[k]).abs() < 1e-12 && (r.high[k] - hi[k]).abs() < 1e-12);
+        assert!((r.centre[k] - mid[k]).abs() < 1e-12);
+    }
+}
+
+/// The steepest-ascent path from table 6's screening fit follows its coefficients: the
+/// leading factor moves one step per point, the others in proportion, and the first-order
+/// prediction rises by step * |b_max| + the others' share per point.
+#[test]
+fn steepest_path_follows_the_screening_coefficients() {
+    use tilth_tools::rsm::steepest_path;
+    let (data, options) = pb();
+    let a = fit(&data, options).unwrap();
+    let p = steepest_path(&a, &[3, 5, 6], 0.5, 5, false).unwrap();
+    let b: Vec<f64> = [3, 5, 6].iter().map(|&i| a.terms[i].coefficient).collect();
+    let bmax = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let rise = 0.5 * b.iter().map(|v| v * v).sum::<f64>() / bmax;
+    for (k, z) in p.coded.iter().enumerate() {
+        assert!((z[6] - 0.5 * k as f64).abs() < 1e-12, "x7 leads");
+        assert!((z[3] - 0.5 * k as f64 * b[0] / bmax).abs() < 1e-12);
+        assert_eq!(z[0], 0.0);
+        assert!((p.predicted[k] - a.intercept - rise * k as f64).abs() < 1e-9);
+    }
+}
