@@ -1,6 +1,7 @@
 //! tilth-tools: offline reductions of runs (repose angle, peak shear force, compressive
 //! strength: [`reduce`]) and statistics (experimental designs: [`design`]).
 
+pub mod calibrate;
 pub mod design;
 pub mod reduce;
 pub mod rsm;

@@ -1,0 +1,11 @@
+//! Parameter uncertainty for a calibration: linearised confidence intervals from the
+//! Jacobian of the residuals, and a posterior sample by sequential Monte Carlo.
+//!
+//! Both work on a cheap model of the observables (a fitted response surface), never on DEM
+//! runs directly: a posterior needs tens of thousands of evaluations.
+
+mod jacobian;
+mod smc;
+
+pub use jacobian::{Linearised, linearised};
+pub use smc::{Posterior, smc};
