@@ -1,6 +1,6 @@
 //! The command-line surface.
 
-use crate::commands::{bench, compare, laws, reduce, rsm, run, sweep};
+use crate::commands::{bench, calibrate, compare, laws, reduce, rsm, run, sweep};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -28,6 +28,9 @@ pub enum Command {
     Reduce(reduce::ReduceArgs),
     /// Simulate every measured condition of a data file and compare (compare.json/csv/md).
     Compare(compare::CompareArgs),
+    /// Fit free model parameters to one test's measurements: surface runs, solve, refine
+    /// with direct runs, uncertainty; writes a calibrated model file.
+    Calibrate(calibrate::CalibrateArgs),
     /// Response surfaces on tables of runs: fit with ANOVA, solve for targets, steepest ascent.
     Rsm {
         #[command(subcommand)]
@@ -50,5 +53,6 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Reduce(args) => reduce::reduce_cmd(&args, out),
         Command::Compare(args) => compare::compare(&args, out),
         Command::Rsm { command } => rsm::rsm(&command, out),
+        Command::Calibrate(args) => calibrate::calibrate(&args, out),
     }
 }

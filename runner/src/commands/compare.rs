@@ -163,7 +163,7 @@ pub struct Compared {
     pub problems: Vec<String>,
 }
 
-fn experiment_text(test: &str, model: &Path, coarse: bool) -> String {
+pub fn experiment_text(test: &str, model: &Path, coarse: bool) -> String {
     // The test's own table is written (empty: defaults) so that factors can set its keys.
     format!(
         "format_version = 1\nexperiment = \"{test}\"\nmodel = {:?}\ncoarse = {coarse}\n[conditions]\n[{test}]\n",
@@ -202,13 +202,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     let mut plans = vec![];
     for test in &tests {
         let mine: Vec<&Measurement> = rows.iter().filter(|m| &m.test == test).collect();
-        let mut factors = vec![factor("moisture_pct", "conditions.moisture_pct")];
-        if test != "repose" {
-            factors.push(factor("firmness_mpa", "conditions.firmness_mpa"));
-        }
-        if test == "direct_shear" {
-            factors.push(factor("normal_pressure_pa", "direct_shear.normal_pressure"));
-        }
+        let factors = condition_factors(test);
         let mut runs = vec![];
         for m in &mine {
             for r in 0..args.replicates {
@@ -285,7 +279,19 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     write_outputs(args, &compared, out)
 }
 
-fn factor(name: &str, target: &str) -> Factor {
+/// The measured conditions of a test, as factors of its experiment file.
+pub fn condition_factors(test: &str) -> Vec<Factor> {
+    let mut factors = vec![factor("moisture_pct", "conditions.moisture_pct")];
+    if test != "repose" {
+        factors.push(factor("firmness_mpa", "conditions.firmness_mpa"));
+    }
+    if test == "direct_shear" {
+        factors.push(factor("normal_pressure_pa", "direct_shear.normal_pressure"));
+    }
+    factors
+}
+
+pub fn factor(name: &str, target: &str) -> Factor {
     Factor {
         name: name.into(),
         target: target.into(),

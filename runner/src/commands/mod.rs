@@ -1,6 +1,7 @@
 //! The subcommands.
 
 pub mod bench;
+pub mod calibrate;
 pub mod compare;
 pub mod laws;
 pub mod reduce;

@@ -37,6 +37,16 @@ pub fn contour_svg(
     s: &Solution,
     fixed: &[(usize, f64)],
 ) -> Result<Option<String>, RsmError> {
+    contour_marked_svg(a, s, fixed, &[])
+}
+
+/// [`contour_svg`] with labelled settings marked (real units of every factor).
+pub fn contour_marked_svg(
+    a: &Anova,
+    s: &Solution,
+    fixed: &[(usize, f64)],
+    marks: &[(Vec<f64>, String)],
+) -> Result<Option<String>, RsmError> {
     const WHAT: &str = "the contour plot";
     let free: Vec<usize> = (0..a.factors.len())
         .filter(|i| !fixed.iter().any(|f| f.0 == *i))
@@ -163,6 +173,14 @@ pub fn contour_svg(
                 }
             ))
             .legend(|(x, y)| Circle::new((x + 10, y), 4, RED.filled()));
+        for (k, (x, label)) in marks.iter().enumerate() {
+            let color = [RGBColor(255, 255, 255), RGBColor(255, 127, 14)][k % 2];
+            chart
+                .draw_series([Cross::new((x[i], x[j]), 7, color.stroke_width(3))])
+                .map_err(err(WHAT))?
+                .label(label.as_str())
+                .legend(move |(x, y)| Cross::new((x + 10, y), 5, color.stroke_width(3)));
+        }
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperLeft)

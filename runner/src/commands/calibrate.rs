@@ -1,0 +1,819 @@
+//! `tilth calibrate`: choose free parameters of a model file so that simulations of one test
+//! hit its measurements at every measured condition, with the scatter of the simulations
+//! measured and the parameters' uncertainty reported.
+//!
+//! 1. **Surface.** At each measured condition, a 3^k factorial over the free parameters' ranges
+//!    plus two more centre points, each run with `--seeds` seeds (so the scatter between
+//!    seeds is pure error in the fit), through the sweep runner (resumable).
+//! 2. **Solve.** A quadratic response surface per condition (`tilth rsm`), solved for the
+//!    measured value: every setting that hits it. When that is a ridge, one measurement
+//!    cannot separate the parameters; the setting chosen is the one on the ridge closest (in
+//!    coded units) to the starting model: the least change that fits, stated as such.
+//! 3. **Refine.** Direct runs at the chosen setting with `--seeds` fresh seeds (the same seeds
+//!    at every iteration: common random numbers); while the mean misses the measurement by
+//!    more than `--tolerance` %, a Newton step along the surface's gradient, up to `--refine`
+//!    times.
+//! 4. **Uncertainty.** Linearised intervals (and the ridge direction when the data cannot
+//!    fix every parameter) and a posterior sample by sequential Monte Carlo on the surface,
+//!    the likelihood's spread being the fit's residual standard deviation.
+//! 5. **Output.** `DIR/calibration.json`, `calibration.md`, a contour plot per condition, the
+//!    posterior samples, and `DIR/model.toml`: the starting model with the calibrated
+//!    parameters as tables over the condition (comments kept).
+
+use super::compare::{Measurement, condition_factors, experiment_text, factor, read_measurements};
+use crate::lab::model::{Model, evaluate};
+use crate::sweep::execute::{self, Options};
+use crate::sweep::job::{Status, read_summary, run_dir};
+use crate::sweep::plan::{Factor, Plan, PlannedRun};
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use tilth_tools::calibrate::{Linearised, Posterior, linearised, smc};
+use tilth_tools::rsm::{self, Data, FitOptions, Order, Table};
+
+#[derive(Debug, Args)]
+pub struct CalibrateArgs {
+    /// Starting model file, e.g. models/li2022.toml.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Measurements (CSV), e.g. data/li2022/measurements.csv.
+    #[arg(long)]
+    pub data: PathBuf,
+    /// The test whose measurements to fit: repose, direct_shear or ucs.
+    #[arg(long)]
+    pub test: String,
+    /// A free parameter and its range: `PAIR.KEY=LOW:HIGH`, e.g.
+    /// `soil-soil.rolling_friction=0.05:0.45` (repeatable).
+    #[arg(long = "param", required = true)]
+    pub params: Vec<String>,
+    /// Runs per setting, with different seeds.
+    #[arg(long, default_value_t = 3)]
+    pub seeds: usize,
+    /// Done when the mean of the runs is within this many percent of the measurement.
+    #[arg(long, default_value_t = 2.0)]
+    pub tolerance: f64,
+    /// Newton refinements with direct runs, at most.
+    #[arg(long, default_value_t = 3)]
+    pub refine: usize,
+    /// The test's coarse preset (bigger particles, less material).
+    #[arg(long)]
+    pub coarse: bool,
+    /// Only measurements whose condition is one of these, e.g. `moisture_pct=6`.
+    #[arg(long = "where")]
+    pub filters: Vec<String>,
+    #[arg(long)]
+    pub out: PathBuf,
+    #[arg(long)]
+    pub cores: Option<usize>,
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// A free parameter.
+#[derive(Debug, Clone, Serialize)]
+pub struct Param {
+    /// `rolling_friction`
+    pub name: String,
+    /// `soil-soil`
+    pub pair: String,
+    pub key: String,
+    pub low: f64,
+    pub high: f64,
+}
+
+fn parse_param(s: &str) -> Result<Param> {
+    let bad = || {
+        anyhow!(
+            "--param {s:?}: expected PAIR.KEY=LOW:HIGH, e.g. soil-soil.rolling_friction=0.05:0.45"
+        )
+    };
+    let (path, range) = s.split_once('=').ok_or_else(bad)?;
+    let (pair, key) = path.trim().split_once('.').ok_or_else(bad)?;
+    let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .map_err(|_| anyhow!("--param {s:?}: {t:?} is not a number"))
+    };
+    let (low, high) = (num(lo)?, num(hi)?);
+    if !(low.is_finite() && high.is_finite() && high > low) {
+        bail!("--param {s:?}: the range must be LOW:HIGH with LOW < HIGH");
+    }
+    Ok(Param {
+        name: key.to_string(),
+        pair: pair.to_string(),
+        key: key.to_string(),
+        low,
+        high,
+    })
+}
+
+/// Per condition: the surface, the solution and the runs at the chosen setting.
+#[derive(Debug, Clone, Serialize)]
+pub struct ConditionResult {
+    pub conditions: BTreeMap<String, f64>,
+    pub measured: f64,
+    pub start: Vec<f64>,
+    pub surface_runs: usize,
+    pub surface_failed: usize,
+    pub r2: f64,
+    pub residual_sd: Option<f64>,
+    pub equation: String,
+    pub ridge_statement: String,
+    pub ridge_points: usize,
+    /// Iterations: setting, runs' values, mean, sd, relative error %.
+    pub iterations: Vec<Iteration>,
+    pub calibrated: Vec<f64>,
+    pub simulated_mean: f64,
+    pub simulated_sd: Option<f64>,
+    pub error_pct: f64,
+    pub within_tolerance: bool,
+    pub linearised: Linearised,
+    pub posterior: Posterior,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Iteration {
+    pub setting: Vec<f64>,
+    pub predicted: f64,
+    pub values: Vec<f64>,
+    pub mean: f64,
+    pub sd: Option<f64>,
+    pub error_pct: f64,
+}
+
+fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let sd =
+        (v.len() > 1).then(|| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt());
+    (m, sd)
+}
+
+pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
+    if !["repose", "direct_shear", "ucs"].contains(&args.test.as_str()) {
+        bail!(
+            "--test {}: unknown, allowed repose, direct_shear, ucs",
+            args.test
+        );
+    }
+    if args.seeds == 0 {
+        bail!("--seeds 0 is out of range: allowed 1 or more");
+    }
+    if !(args.tolerance > 0.0) {
+        bail!(
+            "--tolerance {} is out of range: allowed > 0 (percent)",
+            args.tolerance
+        );
+    }
+    let params: Vec<Param> = args
+        .params
+        .iter()
+        .map(|p| parse_param(p))
+        .collect::<Result<_>>()?;
+    let model_path = std::path::absolute(&args.model)?;
+    let model = Model::load(&model_path)?;
+    for p in &params {
+        if model
+            .file
+            .pairs
+            .get(&p.pair)
+            .and_then(|t| t.get(&p.key))
+            .is_none()
+        {
+            bail!(
+                "--param {}.{}: the model {} has no pairs.{}.{}",
+                p.pair,
+                p.key,
+                args.model.display(),
+                p.pair,
+                p.key
+            );
+        }
+    }
+    let mut rows: Vec<Measurement> = read_measurements(&args.data)?
+        .into_iter()
+        .filter(|m| m.test == args.test)
+        .collect();
+    for f in &args.filters {
+        let (k, v) = f
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--where {f:?}: expected NAME=VALUE"))?;
+        let v: f64 = v
+            .trim()
+            .parse()
+            .map_err(|_| anyhow!("--where {f:?}: {v:?} is not a number"))?;
+        rows.retain(|m| m.conditions.get(k.trim()) == Some(&v));
+    }
+    if rows.is_empty() {
+        bail!(
+            "{}: no {} measurement to calibrate against",
+            args.data.display(),
+            args.test
+        );
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
+        signal_hook::flag::register(sig, stop.clone())?;
+    }
+    let cond_factors = condition_factors(&args.test);
+    let mut factors: Vec<Factor> = cond_factors.clone();
+    for p in &params {
+        let mut f = factor(&p.name, &format!("scene:pairs[{}].{}", p.pair, p.key));
+        f.low = p.low;
+        f.high = p.high;
+        factors.push(f);
+    }
+    let text = experiment_text(&args.test, &model_path, args.coarse);
+    let real = |p: &Param, z: f64| 0.5 * (p.low + p.high) + z * 0.5 * (p.high - p.low);
+    let cond_values = |m: &Measurement| -> Result<BTreeMap<String, f64>> {
+        cond_factors
+            .iter()
+            .map(|f| {
+                m.conditions
+                    .get(&f.name)
+                    .map(|v| (f.name.clone(), *v))
+                    .ok_or_else(|| {
+                        anyhow!(
+                            "{}:{}: a {} row needs `{}`",
+                            args.data.display(),
+                            m.row,
+                            args.test,
+                            f.name
+                        )
+                    })
+            })
+            .collect()
+    };
+
+    // 1. The surface runs.
+    let k = params.len();
+    let mut grid: Vec<Vec<f64>> = (0..3usize.pow(k as u32))
+        .map(|mut g| {
+            (0..k)
+                .map(|_| {
+                    let v = (g % 3) as f64 - 1.0;
+                    g /= 3;
+                    v
+                })
+                .collect()
+        })
+        .collect();
+    grid.push(vec![0.0; k]);
+    grid.push(vec![0.0; k]);
+    let mut runs = vec![];
+    for m in &rows {
+        for (g, z) in grid.iter().enumerate() {
+            // The factorial shares its seeds (common random numbers: differences between
+            // settings are not blurred by the packing); the two extra centre points take
+            // fresh seeds, so that they measure the scatter between seeds.
+            let first_seed = 1 + g.saturating_sub(grid.len() - 3) * args.seeds;
+            for s in 0..args.seeds {
+                let mut values = cond_values(m)?;
+                for (p, zi) in params.iter().zip(z) {
+                    values.insert(p.name.clone(), real(p, *zi));
+                }
+                runs.push(PlannedRun {
+                    id: runs.len() + 1,
+                    std: m.row,
+                    replicate: s + 1,
+                    coded: params
+                        .iter()
+                        .zip(z)
+                        .map(|(p, v)| (p.name.clone(), *v))
+                        .collect(),
+                    values,
+                    seed: (first_seed + s) as u64,
+                });
+            }
+        }
+    }
+    let surface = Plan::generated(
+        &format!("{}-surface", args.test),
+        text.clone(),
+        Path::new("."),
+        factors.clone(),
+        runs,
+    )?;
+    let results = run_plan(&surface, &args.out.join("surface"), args, &stop)?;
+
+    // 2-4 per condition.
+    let mut report = vec![];
+    for m in &rows {
+        let conds = cond_values(m)?;
+        let mine: Vec<(&PlannedRun, Option<f64>)> = surface
+            .runs
+            .iter()
+            .zip(&results)
+            .filter(|(r, _)| r.std == m.row)
+            .map(|(r, v)| (r, *v))
+            .collect();
+        let ok: Vec<(&PlannedRun, f64)> = mine
+            .iter()
+            .filter_map(|(r, v)| v.map(|v| (*r, v)))
+            .collect();
+        let mut columns: Vec<(&str, Vec<f64>)> = params
+            .iter()
+            .map(|p| {
+                (
+                    p.name.as_str(),
+                    ok.iter().map(|(r, _)| r.values[&p.name]).collect(),
+                )
+            })
+            .collect();
+        columns.push((m.observable.as_str(), ok.iter().map(|(_, v)| *v).collect()));
+        let origin = format!("{} surface at {}", args.test, describe(&conds));
+        let table = Table::from_columns(&origin, &columns);
+        let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
+        let ranges: Vec<(f64, f64)> = params.iter().map(|p| (p.low, p.high)).collect();
+        let data = Data::from_table(&table, &names, &m.observable, Some(&ranges))?;
+        let fit = rsm::fit(
+            &data,
+            FitOptions {
+                order: Order::Quadratic,
+                curvature: false,
+                backward: None,
+            },
+        )
+        .with_context(|| format!("{origin}: {} of {} runs finished", ok.len(), mine.len()))?;
+        let start: Vec<f64> = params
+            .iter()
+            .map(|p| evaluate(&model.file.pairs[&p.pair][&p.key], &conds))
+            .collect::<Result<_>>()?;
+        let solution = rsm::solve(&fit, &describe(&conds), m.value, &[])?;
+        let zs = fit.coding.code(&start);
+        let chosen = solution
+            .settings
+            .iter()
+            .min_by(|a, b| {
+                let d = |s: &rsm::Setting| {
+                    fit.coding
+                        .code(&s.values)
+                        .iter()
+                        .zip(&zs)
+                        .map(|(x, y)| (x - y).powi(2))
+                        .sum::<f64>()
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .or(solution.closest.as_ref())
+            .map(|s| s.values.clone())
+            .unwrap_or_else(|| start.clone());
+        if !args.quiet {
+            eprintln!("{}: {}", describe(&conds), solution.statement);
+        }
+        report.push((
+            m.clone(),
+            conds,
+            fit,
+            solution,
+            start,
+            chosen,
+            mine.len() - ok.len(),
+            mine.len(),
+        ));
+    }
+
+    // 3. Refine with direct runs, all conditions together per iteration.
+    let mut settings: Vec<Vec<f64>> = report.iter().map(|r| r.5.clone()).collect();
+    let mut iterations: Vec<Vec<Iteration>> = vec![vec![]; report.len()];
+    let mut active: Vec<bool> = vec![true; report.len()];
+    for it in 0..=args.refine {
+        if !active.iter().any(|a| *a) {
+            break;
+        }
+        let mut runs = vec![];
+        for (c, r) in report.iter().enumerate().filter(|(c, _)| active[*c]) {
+            for s in 0..args.seeds {
+                let mut values = r.1.clone();
+                for (p, v) in params.iter().zip(&settings[c]) {
+                    values.insert(p.name.clone(), *v);
+                }
+                runs.push(PlannedRun {
+                    id: runs.len() + 1,
+                    std: c,
+                    replicate: s + 1,
+                    coded: BTreeMap::new(),
+                    values,
+                    seed: 1001 + s as u64,
+                });
+            }
+        }
+        let plan = Plan::generated(
+            &format!("{}-check-{it}", args.test),
+            text.clone(),
+            Path::new("."),
+            factors.clone(),
+            runs,
+        )?;
+        let values = run_plan(&plan, &args.out.join(format!("check-{it}")), args, &stop)?;
+        for c in 0..report.len() {
+            if !active[c] {
+                continue;
+            }
+            let got: Vec<f64> = plan
+                .runs
+                .iter()
+                .zip(&values)
+                .filter(|(r, _)| r.std == c)
+                .filter_map(|(_, v)| *v)
+                .collect();
+            if got.is_empty() {
+                bail!(
+                    "{}: every run at the chosen setting failed (see {})",
+                    describe(&report[c].1),
+                    args.out.join(format!("check-{it}")).display()
+                );
+            }
+            let (mean, sd) = mean_sd(&got);
+            let target = report[c].0.value;
+            let fit = &report[c].2;
+            let err = 100.0 * (mean - target) / target;
+            iterations[c].push(Iteration {
+                setting: settings[c].clone(),
+                predicted: fit.predict(&settings[c]),
+                values: got,
+                mean,
+                sd,
+                error_pct: err,
+            });
+            if err.abs() <= args.tolerance || it == args.refine {
+                active[c] = false;
+                continue;
+            }
+            // Newton step along the surface's gradient (real units), inside the ranges.
+            let z = fit.coding.code(&settings[c]);
+            let g: Vec<f64> = fit
+                .gradient_coded(&z)
+                .iter()
+                .enumerate()
+                .map(|(i, d)| d / fit.coding.half(i))
+                .collect();
+            let g2: f64 = g.iter().map(|v| v * v).sum();
+            if g2 == 0.0 {
+                active[c] = false;
+                continue;
+            }
+            let miss = mean - target;
+            settings[c] = settings[c]
+                .iter()
+                .zip(&g)
+                .zip(&params)
+                .map(|((x, gi), p)| (x - miss * gi / g2).clamp(p.low, p.high))
+                .collect();
+        }
+    }
+
+    // 4. Uncertainty, and the outputs.
+    let mut results_out = vec![];
+    for (c, (m, conds, fit, solution, start, _, failed, total)) in report.into_iter().enumerate() {
+        let last = iterations[c]
+            .last()
+            .cloned()
+            .expect("at least one iteration");
+        let meas_sd = 0.0;
+        let sigma = (fit.std_dev.unwrap_or(0.0).powi(2) + meas_sd)
+            .sqrt()
+            .max(1e-9 * m.value.abs());
+        let lin = linearised(
+            |t| vec![(fit.predict(t) - m.value) / sigma],
+            &last.setting,
+            &params
+                .iter()
+                .map(|p| 1e-4 * (p.high - p.low))
+                .collect::<Vec<_>>(),
+        );
+        let low: Vec<f64> = params.iter().map(|p| p.low).collect();
+        let high: Vec<f64> = params.iter().map(|p| p.high).collect();
+        let post = smc(
+            |t| -0.5 * ((fit.predict(t) - m.value) / sigma).powi(2),
+            &low,
+            &high,
+            2000,
+            17 + c as u64,
+        );
+        std::fs::create_dir_all(&args.out)?;
+        write_samples(
+            &args
+                .out
+                .join(format!("posterior-{}.csv", slug(&describe(&conds)))),
+            &params,
+            &post,
+        )?;
+        let marks = vec![
+            (start.clone(), "starting model".to_string()),
+            (
+                last.setting.clone(),
+                format!(
+                    "calibrated: {:.2} +- {:.2} over {} seeds",
+                    last.mean,
+                    last.sd.unwrap_or(0.0),
+                    last.values.len()
+                ),
+            ),
+        ];
+        if let Some(svg) = tilth_tools::rsm::plot::contour_marked_svg(&fit, &solution, &[], &marks)?
+        {
+            std::fs::write(
+                args.out
+                    .join(format!("contour-{}.svg", slug(&describe(&conds)))),
+                svg,
+            )?;
+        }
+        results_out.push(ConditionResult {
+            conditions: conds,
+            measured: m.value,
+            start,
+            surface_runs: total,
+            surface_failed: failed,
+            r2: fit.r2,
+            residual_sd: fit.std_dev,
+            equation: fit.equation_real.clone(),
+            ridge_statement: solution.statement.clone(),
+            ridge_points: solution.settings.len(),
+            calibrated: last.setting.clone(),
+            simulated_mean: last.mean,
+            simulated_sd: last.sd,
+            error_pct: last.error_pct,
+            within_tolerance: last.error_pct.abs() <= args.tolerance,
+            iterations: iterations[c].clone(),
+            linearised: lin,
+            posterior: post,
+        });
+    }
+    let model_out = args.out.join("model.toml");
+    write_model(&model_path, &model_out, &params, &results_out)?;
+    let json = serde_json::json!({
+        "test": args.test,
+        "model": args.model,
+        "coarse": args.coarse,
+        "seeds": args.seeds,
+        "tolerance_pct": args.tolerance,
+        "params": params,
+        "conditions": results_out,
+        "calibrated_model": model_out,
+    });
+    std::fs::write(
+        args.out.join("calibration.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    let md = markdown(args, &params, &results_out);
+    std::fs::write(args.out.join("calibration.md"), &md)?;
+    write!(out, "{md}")?;
+    Ok(())
+}
+
+/// Runs `plan` into `dir`; each run's observable (None when it failed).
+fn run_plan(
+    plan: &Plan,
+    dir: &Path,
+    args: &CalibrateArgs,
+    stop: &Arc<AtomicBool>,
+) -> Result<Vec<Option<f64>>> {
+    if !args.quiet {
+        eprintln!(
+            "{}: {} runs into {}",
+            plan.name,
+            plan.runs.len(),
+            dir.display()
+        );
+    }
+    let opts = Options {
+        out: dir.to_path_buf(),
+        cores: args.cores,
+        shard: None,
+        retry_failed: false,
+        show_progress: !args.quiet,
+        pin: true,
+    };
+    let outcome = execute::execute(plan, &opts, stop.clone())?;
+    if outcome.interrupted {
+        return Err(super::sweep::SweepEnd::Interrupted.into());
+    }
+    let observable = match args.test.as_str() {
+        "repose" => "repose_angle_deg",
+        "direct_shear" => "peak_shear_force_n",
+        _ => "ucs_kpa",
+    };
+    Ok(plan
+        .runs
+        .iter()
+        .map(|r| {
+            let s = read_summary(&run_dir(dir, r.id))?;
+            if s.status != Status::Done {
+                return None;
+            }
+            s.reduced.as_ref()?.get(observable)?.as_f64()
+        })
+        .collect())
+}
+
+fn describe(c: &BTreeMap<String, f64>) -> String {
+    c.iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn slug(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+fn write_samples(path: &Path, params: &[Param], post: &Posterior) -> Result<()> {
+    let mut text = params
+        .iter()
+        .map(|p| p.name.clone())
+        .collect::<Vec<_>>()
+        .join(",")
+        + "\n";
+    for s in &post.samples {
+        text += &(s
+            .iter()
+            .map(|v| format!("{v}"))
+            .collect::<Vec<_>>()
+            .join(",")
+            + "\n");
+    }
+    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// The starting model with each parameter replaced by a table over the single condition that
+/// varies (or a constant with one condition); everything else kept as written.
+fn write_model(
+    from: &Path,
+    to: &Path,
+    params: &[Param],
+    results: &[ConditionResult],
+) -> Result<()> {
+    let text = std::fs::read_to_string(from)
+        .with_context(|| format!("{}: cannot read", from.display()))?;
+    let mut doc: toml_edit::DocumentMut = text
+        .parse()
+        .with_context(|| format!("{}: not TOML", from.display()))?;
+    let varying: Vec<&String> = results
+        .first()
+        .map(|r| {
+            r.conditions
+                .keys()
+                .filter(|k| results.iter().any(|o| o.conditions[*k] != r.conditions[*k]))
+                .collect()
+        })
+        .unwrap_or_default();
+    for (i, p) in params.iter().enumerate() {
+        let value: toml_edit::Value = match varying.as_slice() {
+            [] => results[0].calibrated[i].into(),
+            [cond] => {
+                let mut pts: Vec<(f64, f64)> = results
+                    .iter()
+                    .map(|r| (r.conditions[*cond], r.calibrated[i]))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut t = toml_edit::InlineTable::new();
+                t.insert("interpolate", cond.as_str().into());
+                t.insert(
+                    "x",
+                    toml_edit::Value::Array(pts.iter().map(|p| p.0).collect()),
+                );
+                t.insert(
+                    "y",
+                    toml_edit::Value::Array(
+                        pts.iter().map(|p| (p.1 * 1e6).round() / 1e6).collect(),
+                    ),
+                );
+                toml_edit::Value::InlineTable(t)
+            }
+            _ => bail!(
+                "calibrated values vary over several conditions ({}); a model table needs one",
+                varying
+                    .iter()
+                    .map(|s| s.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        let pair = doc["pairs"][&p.pair]
+            .as_table_like_mut()
+            .ok_or_else(|| anyhow!("{}: no [pairs.{}]", from.display(), p.pair))?;
+        let mut item = toml_edit::value(value);
+        if let Some(v) = item.as_value_mut() {
+            v.decor_mut().set_suffix(format!(
+                "  # calibrated by tilth calibrate ({})",
+                chrono_free_note()
+            ));
+        }
+        pair.insert(&p.key, item);
+    }
+    std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
+}
+
+fn chrono_free_note() -> String {
+    format!("tilth {}", crate::GIT_COMMIT)
+}
+
+fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]) -> String {
+    let mut s = format!(
+        "# Calibration of {} against {}\n\n{} free parameter(s): {}; {} seeds per setting; tolerance {} %{}.\n\n",
+        args.test,
+        args.data.display(),
+        params.len(),
+        params
+            .iter()
+            .map(|p| format!("{}.{} in [{}, {}]", p.pair, p.key, p.low, p.high))
+            .collect::<Vec<_>>()
+            .join(", "),
+        args.seeds,
+        args.tolerance,
+        if args.coarse { "; coarse preset" } else { "" }
+    );
+    s += "| conditions | measured | start | calibrated | simulated (mean +- sd) | error | within |\n|---|---|---|---|---|---|---|\n";
+    let v = |x: &[f64]| {
+        x.iter()
+            .map(|v| format!("{v:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {} | {:.2} +- {:.2} (n={}) | {:+.2} % | {} |\n",
+            describe(&r.conditions),
+            r.measured,
+            v(&r.start),
+            v(&r.calibrated),
+            r.simulated_mean,
+            r.simulated_sd.unwrap_or(f64::NAN),
+            r.iterations.last().map_or(0, |i| i.values.len()),
+            r.error_pct,
+            if r.within_tolerance { "yes" } else { "NO" }
+        );
+    }
+    s += "\n";
+    for r in rows {
+        s += &format!("## {}\n\n", describe(&r.conditions));
+        s += &format!(
+            "- surface: {} runs ({} failed), quadratic R^2 {:.4}, residual sd {}\n- {}\n",
+            r.surface_runs,
+            r.surface_failed,
+            r.r2,
+            r.residual_sd.map_or("-".into(), |v| format!("{v:.3}")),
+            r.ridge_statement
+        );
+        for (k, it) in r.iterations.iter().enumerate() {
+            s += &format!(
+                "- run {k}: setting ({}) predicted {:.2}, simulated {:.2} +- {:.2} ({:+.2} %)\n",
+                v(&it.setting),
+                it.predicted,
+                it.mean,
+                it.sd.unwrap_or(f64::NAN),
+                it.error_pct
+            );
+        }
+        let l = &r.linearised;
+        if l.rank < params.len() {
+            s += &format!(
+                "- linearised: the measurement fixes {} of {} parameter combinations; the parameters trade off along ({}) without changing the fit\n",
+                l.rank,
+                params.len(),
+                l.null_directions.first().map_or(String::new(), |d| v(d))
+            );
+        }
+        for (i, p) in params.iter().enumerate() {
+            if let Some((a, b)) = l.conditional_ci95[i] {
+                s += &format!(
+                    "- {} with the others held: 95 % interval [{a:.4}, {b:.4}]\n",
+                    p.name
+                );
+            }
+        }
+        let post = &r.posterior;
+        s += &format!(
+            "- posterior (SMC, {} stages): {}{}\n\n",
+            post.stages,
+            params
+                .iter()
+                .enumerate()
+                .map(|(i, p)| format!("{} 95 % [{:.4}, {:.4}]", p.name, post.q025[i], post.q975[i]))
+                .collect::<Vec<_>>()
+                .join(", "),
+            if params.len() == 2 {
+                format!(", correlation {:.2}", post.correlation[0][1])
+            } else {
+                String::new()
+            }
+        );
+    }
+    s
+}
