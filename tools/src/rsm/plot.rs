@@ -13,13 +13,18 @@ const FONT: &str = "sans-serif";
 const BLUE: RGBColor = RGBColor(31, 119, 180);
 const RED: RGBColor = RGBColor(214, 39, 40);
 const GREY: RGBColor = RGBColor(127, 127, 127);
-const PALETTE: [RGBColor; 6] = [
+/// Tableau's ten colours.
+const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
     RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
 ];
 
 fn err<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> RsmError {
@@ -283,18 +288,28 @@ pub fn pareto_svg(a: &Anova) -> Result<String, RsmError> {
             .y_label_area_size(55)
             .build_cartesian_2d(0.0..n as f64, 0.0..top)
             .map_err(err(WHAT))?;
-        let names: Vec<String> = bars.iter().map(|b| b.0.clone()).collect();
         chart
             .configure_mesh()
             .disable_x_mesh()
-            .x_labels(n.max(1))
-            .x_label_formatter(&|v| {
-                let k = v.floor() as usize;
-                names.get(k).cloned().unwrap_or_default()
-            })
+            .x_labels(0)
             .y_desc("|t| (standardized effect)")
             .label_style((FONT, 12))
             .draw()
+            .map_err(err(WHAT))?;
+        // Term names above their bars (axis labels would sit at the bars' edges).
+        chart
+            .draw_series(bars.iter().enumerate().map(|(k, b)| {
+                Text::new(
+                    b.0.clone(),
+                    (k as f64 + 0.5, b.1 + top * 0.015),
+                    TextStyle::from((FONT, 12).into_font()).pos(
+                        plotters::style::text_anchor::Pos::new(
+                            plotters::style::text_anchor::HPos::Center,
+                            plotters::style::text_anchor::VPos::Bottom,
+                        ),
+                    ),
+                )
+            }))
             .map_err(err(WHAT))?;
         chart
             .draw_series(bars.iter().enumerate().map(|(k, b)| {
