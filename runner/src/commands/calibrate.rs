@@ -11,8 +11,8 @@
 //!    coded units) to the starting model: the least change that fits, stated as such.
 //! 3. **Refine.** Direct runs at the chosen setting with `--seeds` fresh seeds (the same seeds
 //!    at every iteration: common random numbers); while the mean misses the measurement by
-//!    more than `--tolerance` %, a Newton step along the surface's gradient, up to `--refine`
-//!    times.
+//!    more than `--tolerance` %, a Newton step along the surface's gradient (at most a quarter
+//!    of each range), up to `--refine` times.
 //! 4. **Uncertainty.** Linearised intervals (and the ridge direction when the data cannot
 //!    fix every parameter) and a posterior sample by sequential Monte Carlo on the surface,
 //!    the likelihood's spread being the fit's residual standard deviation.
@@ -460,12 +460,20 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
                 active[c] = false;
                 continue;
             }
+            // A trust region: the surface is a fit to noisy runs, so no step goes further than
+            // a quarter of any parameter's range (half a coded unit).
             let miss = mean - target;
+            let step: Vec<f64> = g.iter().map(|gi| -miss * gi / g2).collect();
+            let worst = step
+                .iter()
+                .zip(&params)
+                .map(|(d, p)| d.abs() / (0.25 * (p.high - p.low)))
+                .fold(1.0, f64::max);
             settings[c] = settings[c]
                 .iter()
-                .zip(&g)
+                .zip(&step)
                 .zip(&params)
-                .map(|((x, gi), p)| (x - miss * gi / g2).clamp(p.low, p.high))
+                .map(|((x, d), p)| (x + d / worst).clamp(p.low, p.high))
                 .collect();
         }
     }
