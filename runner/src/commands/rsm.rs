@@ -346,6 +346,26 @@ pub fn prepare(m: &ModelArgs) -> Result<(Data, FitOptions)> {
 
 fn load(m: &ModelArgs) -> Result<Data> {
     let mut table = Table::read(&m.csv)?;
+    // A sweep's results table: runs that did not finish have no trustworthy response.
+    if let Ok(status) = table.text("status") {
+        let keep: Vec<bool> = status.iter().map(|s| s == "done").collect();
+        let dropped: Vec<String> = table
+            .lines
+            .iter()
+            .zip(&keep)
+            .filter(|(_, k)| !**k)
+            .map(|(l, _)| l.to_string())
+            .collect();
+        if !dropped.is_empty() {
+            eprintln!(
+                "warning: {}: {} run(s) whose status is not `done` left out (lines {})",
+                m.csv.display(),
+                dropped.len(),
+                dropped.join(", ")
+            );
+            table = table.filter(&keep);
+        }
+    }
     for f in &m.filters {
         let (col, value) = f
             .split_once('=')

@@ -193,3 +193,41 @@ fn refusals_name_the_problem() {
         "{e}"
     );
 }
+
+/// A sweep's results table: runs that did not finish are left out, with a warning naming
+/// their lines.
+#[test]
+fn unfinished_runs_are_left_out() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-status");
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("results.csv");
+    std::fs::write(
+        &csv,
+        "run,a,b,status,y\n1,-1,-1,done,1\n2,1,-1,done,3\n3,-1,1,done,2\n4,1,1,done,4.5\n5,0,0,failed,99\n6,0,0,done,2.6\n",
+    )
+    .unwrap();
+    let out = tilth(&[
+        "rsm",
+        "fit",
+        csv.to_str().unwrap(),
+        "--response",
+        "y",
+        "--factors",
+        "a,b",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("1 run(s) whose status is not `done` left out (lines 6)"),
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["runs"], 5);
+    // The mean of the five finished runs, not the failed run's 99.
+    assert!((v["mean"].as_f64().unwrap() - 13.1 / 5.0).abs() < 1e-12);
+}
