@@ -334,10 +334,15 @@ impl ReposeProtocol {
         h.height_m >= self.p.drop_height - self.diameter
     }
 
-    /// Fails when particles stay in the funnel, at rest, well after the pour: the outlet
-    /// arched over (cohesion, or particles too large for it).
-    fn check_jam(&self, sim: &Simulation) -> Result<()> {
-        if sim.time < self.fill_time + 0.5 || sim.particles.len() < self.count {
+    /// Fails when particles stay in the funnel, at rest, well after the pour (or once what
+    /// has reached the tray is at rest, `settled`): the outlet arched over (cohesion, or
+    /// particles too large for it). Not when the heap has grown up to the outlet: then the
+    /// heap holds the soil back, and the result says so.
+    fn check_jam(&self, sim: &Simulation, settled: bool) -> Result<()> {
+        if sim.particles.len() < self.count || (!settled && sim.time < self.fill_time + 0.5) {
+            return Ok(());
+        }
+        if self.reached_outlet(sim) {
             return Ok(());
         }
         let p = &sim.particles;
@@ -374,10 +379,12 @@ impl Protocol for ReposeProtocol {
             self.angles.push((sim.time, h.cone_angle_deg));
             self.next_check = sim.time + self.check_every;
             if self.at_rest(sim) {
+                // At rest with most of the soil still in the funnel is a jam, not a heap.
+                self.check_jam(sim, true)?;
                 self.settled_at = Some(sim.time);
                 return Ok(Control::Done);
             }
-            self.check_jam(sim)?;
+            self.check_jam(sim, false)?;
         }
         if sim.time >= self.p.max_time - 0.5 * sim.dt {
             return Ok(Control::Done);

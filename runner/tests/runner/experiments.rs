@@ -192,3 +192,36 @@ fn compare_puts_simulated_next_to_measured_with_errors_from_their_definition() {
     assert!(!base.join("bad").exists());
     let _ = std::fs::remove_dir_all(&base);
 }
+
+/// A funnel whose outlet arches over: the run stops with the jam named, instead of reporting
+/// the few grains that got through as a heap "at rest".
+#[test]
+fn a_jammed_funnel_is_an_error_not_a_heap() {
+    let dir = std::env::temp_dir().join(format!("tilth-jam-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml");
+    let file = dir.join("jam.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "format_version = 1\nexperiment = \"repose\"\nmodel = {:?}\ncoarse = true\n[conditions]\nmoisture_pct = 12\n[repose]\nfunnel_outlet_diameter = 0.0125\n",
+            model.display().to_string()
+        ),
+    )
+    .unwrap();
+    let out = tilth()
+        .arg("run")
+        .arg(&file)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("the funnel jammed at t = ")
+            && err.contains("particles are at rest above the outlet"),
+        "{err}"
+    );
+}
