@@ -313,6 +313,19 @@ impl ReposeProtocol {
         if n == 0 || sum / n as f64 > self.p.rest_speed {
             return false;
         }
+        // The heap is not done while the funnel still holds a fifth of the soil and it moves:
+        // a choked outlet lets the heap below rest while the pour goes on (then either the
+        // funnel empties, or it comes to rest and `check_jam` names the jam).
+        let above: Vec<usize> = (0..p.len())
+            .filter(|&k| p.position[k].z > self.z_out)
+            .collect();
+        if above.len() * 5 > self.count && !self.reached_outlet(sim) {
+            let speed =
+                above.iter().map(|&k| p.velocity[k].length()).sum::<f64>() / above.len() as f64;
+            if speed > self.p.rest_speed {
+                return false;
+            }
+        }
         let since = sim.time - self.p.rest_time;
         let window: Vec<f64> = self
             .angles
