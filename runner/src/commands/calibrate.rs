@@ -21,9 +21,11 @@
 //!    parameters as tables over the condition (comments kept).
 
 use super::calibrate_report;
-use super::compare::{Measurement, condition_factors, experiment_text, factor, read_measurements};
+use super::compare::{
+    Measurement, condition_factors, experiment_text, factor, read_measurements, run_generated,
+};
 use crate::lab::model::{Model, evaluate};
-use crate::sweep::execute::{self, Options};
+use crate::sweep::execute;
 use crate::sweep::job::{Status, read_summary, run_dir};
 use crate::sweep::plan::{Factor, Plan, PlannedRun};
 use anyhow::{Context, Result, anyhow, bail};
@@ -218,11 +220,7 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             args.test
         );
     }
-    let stop = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
-        signal_hook::flag::register(sig, stop.clone())?;
-    }
+    let stop = execute::stop_on_signals()?;
     let cond_factors = condition_factors(&args.test);
     let mut factors: Vec<Factor> = cond_factors.clone();
     for p in &params {
@@ -585,26 +583,7 @@ fn run_plan(
     args: &CalibrateArgs,
     stop: &Arc<AtomicBool>,
 ) -> Result<Vec<Option<f64>>> {
-    if !args.quiet {
-        eprintln!(
-            "{}: {} runs into {}",
-            plan.name,
-            plan.runs.len(),
-            dir.display()
-        );
-    }
-    let opts = Options {
-        out: dir.to_path_buf(),
-        cores: args.cores,
-        shard: None,
-        retry_failed: false,
-        show_progress: !args.quiet,
-        pin: true,
-    };
-    let outcome = execute::execute(plan, &opts, stop.clone())?;
-    if outcome.interrupted {
-        return Err(super::sweep::SweepEnd::Interrupted.into());
-    }
+    run_generated(plan, dir, args.cores, args.quiet, stop)?;
     let observable = match args.test.as_str() {
         "repose" => "repose_angle_deg",
         "direct_shear" => "peak_shear_force_n",

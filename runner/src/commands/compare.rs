@@ -193,11 +193,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     {
         bail!("--tests: `{t}` is unknown: allowed repose, direct_shear, ucs");
     }
-    let stop = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
-        signal_hook::flag::register(sig, stop.clone())?;
-    }
+    let stop = execute::stop_on_signals()?;
     // Plan every test first, so that a bad row stops everything before any run.
     let mut plans = vec![];
     for test in &tests {
@@ -236,21 +232,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     let mut compared = vec![];
     for (test, plan) in &plans {
         let dir = args.out.join(test);
-        if !args.quiet {
-            eprintln!("{test}: {} runs into {}", plan.runs.len(), dir.display());
-        }
-        let opts = Options {
-            out: dir.clone(),
-            cores: args.cores,
-            shard: None,
-            retry_failed: false,
-            show_progress: !args.quiet,
-            pin: true,
-        };
-        let outcome = execute::execute(plan, &opts, stop.clone())?;
-        if outcome.interrupted {
-            return Err(super::sweep::SweepEnd::Interrupted.into());
-        }
+        run_generated(plan, &dir, args.cores, args.quiet, &stop)?;
         for m in rows.iter().filter(|m| &m.test == test) {
             let mut sims = vec![];
             let mut problems = vec![];
@@ -277,6 +259,37 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
         }
     }
     write_outputs(args, &compared, out)
+}
+
+/// Runs (or resumes) a generated plan into `dir`, pinned, with a progress bar unless `quiet`.
+pub fn run_generated(
+    plan: &Plan,
+    dir: &Path,
+    cores: Option<usize>,
+    quiet: bool,
+    stop: &Arc<AtomicBool>,
+) -> Result<()> {
+    if !quiet {
+        eprintln!(
+            "{}: {} runs into {}",
+            plan.name,
+            plan.runs.len(),
+            dir.display()
+        );
+    }
+    let opts = Options {
+        out: dir.to_path_buf(),
+        cores,
+        shard: None,
+        retry_failed: false,
+        show_progress: !quiet,
+        pin: true,
+    };
+    let outcome = execute::execute(plan, &opts, stop.clone())?;
+    if outcome.interrupted {
+        return Err(super::sweep::SweepEnd::Interrupted.into());
+    }
+    Ok(())
 }
 
 /// The measured conditions of a test, as factors of its experiment file.

@@ -123,11 +123,7 @@ fn run_experiment(args: &RunArgs, file: &std::path::Path, out: &mut dyn Write) -
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs").join(&plan.name));
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
-        signal_hook::flag::register(sig, stop.clone())?;
-    }
+    let stop = crate::sweep::execute::stop_on_signals()?;
     let opts = Options {
         out: dir.clone(),
         cores: Some(plan.threads),

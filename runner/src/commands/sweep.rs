@@ -8,8 +8,6 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Subcommand};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 
 #[derive(Debug, Subcommand)]
 pub enum SweepCommand {
@@ -195,12 +193,7 @@ fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
         None => slurm_shard()?,
     };
     let dir = args.out.clone().unwrap_or_else(|| default_out(&plan));
-    let stop = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        // A second signal while stopping exits at once.
-        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
-        signal_hook::flag::register(sig, stop.clone())?;
-    }
+    let stop = execute::stop_on_signals()?;
     let opts = Options {
         out: dir.clone(),
         cores: args.cores,

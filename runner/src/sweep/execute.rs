@@ -94,6 +94,17 @@ pub struct Outcome {
     pub ran: usize,
 }
 
+/// A flag that SIGINT and SIGTERM raise, so that runs stop cleanly (MCAP files closed, the
+/// manifest written); a second signal while stopping exits at once.
+pub fn stop_on_signals() -> Result<Arc<AtomicBool>> {
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())?;
+        signal_hook::flag::register(sig, stop.clone())?;
+    }
+    Ok(stop)
+}
+
 /// Runs every run of `plan` in this shard that is not done yet.
 pub fn execute(plan: &Plan, opts: &Options, stop: Arc<AtomicBool>) -> Result<Outcome> {
     let mut budget = budget(opts.cores)?;
