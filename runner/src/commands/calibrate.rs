@@ -507,9 +507,10 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         );
         std::fs::create_dir_all(&args.out)?;
         calibrate_report::write_samples(
-            &args
-                .out
-                .join(format!("posterior-{}.csv", slug(&describe(&conds)))),
+            &args.out.join(format!(
+                "posterior-{}.csv",
+                super::rsm_plot::slug(&describe(&conds))
+            )),
             &params,
             &post,
         )?;
@@ -528,8 +529,10 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         if let Some(svg) = tilth_tools::rsm::plot::contour_marked_svg(&fit, &solution, &[], &marks)?
         {
             std::fs::write(
-                args.out
-                    .join(format!("contour-{}.svg", slug(&describe(&conds)))),
+                args.out.join(format!(
+                    "contour-{}.svg",
+                    super::rsm_plot::slug(&describe(&conds))
+                )),
                 svg,
             )?;
         }
@@ -607,16 +610,4 @@ pub fn describe(c: &BTreeMap<String, f64>) -> String {
         .map(|(k, v)| format!("{k}={v}"))
         .collect::<Vec<_>>()
         .join(",")
-}
-
-fn slug(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
 }

@@ -10,7 +10,7 @@ fn write(path: PathBuf, svg: String) -> Result<PathBuf> {
 }
 
 /// File-name-safe form of a label.
-fn slug(s: &str) -> String {
+pub fn slug(s: &str) -> String {
     s.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '.' || c == '-' {

@@ -194,11 +194,7 @@ pub fn checks(list: &[Check], file: &str, out: &mut dyn Write) -> std::io::Resul
 
 /// Five significant digits.
 fn short(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let digits = (4 - v.abs().log10().floor() as i32).clamp(0, 10) as usize;
-    format!("{v:.digits$}")
+    tilth_tools::rsm::significant(v, 5)
 }
 
 /// One target's solutions: a sample of the settings, the extent, the statement.

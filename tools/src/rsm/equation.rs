@@ -89,7 +89,13 @@ pub fn format(response: &str, list: &[(String, f64)]) -> String {
     let mut out = format!("{response} =");
     for (k, (name, v)) in list.iter().enumerate() {
         let sign = if *v < 0.0 { "-" } else { "+" };
-        let mag = significant(v.abs());
+        // Six significant digits; an exponent only for extreme magnitudes.
+        let a = v.abs();
+        let mag = if a == 0.0 || (1e-4..1e7).contains(&a) {
+            significant(a, 6)
+        } else {
+            format!("{a:.5e}")
+        };
         out += &match (k, name.as_str()) {
             (0, "intercept") => format!(" {}{mag}", if *v < 0.0 { "-" } else { "" }),
             _ => format!(" {sign} {mag} {name}"),
@@ -98,15 +104,12 @@ pub fn format(response: &str, list: &[(String, f64)]) -> String {
     out
 }
 
-/// Six significant digits, without exponent for ordinary magnitudes.
-fn significant(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
+/// `v` with `digits` significant digits, in plain decimal notation (0 and non-finite values
+/// as Rust prints them).
+pub fn significant(v: f64, digits: u32) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
     }
-    let digits = (5 - v.log10().floor() as i32).clamp(0, 12) as usize;
-    if (1e-4..1e7).contains(&v) {
-        format!("{v:.digits$}")
-    } else {
-        format!("{v:.5e}")
-    }
+    let d = (digits as i32 - 1 - v.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    format!("{v:.d$}")
 }

@@ -28,7 +28,7 @@ mod terms;
 pub use anova::{Anova, FitOptions, RunDiagnostic, SourceRow, TermRow, fit};
 pub use coding::Coding;
 pub use data::Data;
-pub use equation::format as format_equation;
+pub use equation::{format as format_equation, significant};
 pub use error::RsmError;
 pub use path::{NextRegion, SteepestPath, next_region, steepest_path};
 pub use reported::{Check, compare_reported};

@@ -4,6 +4,7 @@
 //! Drawn as the reducers' pictures are (plotters' SVG backend, text left to the viewer).
 
 use super::{Anova, RsmError, Solution};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::RGBColor;
 use plotters::style::colors::colormaps::ViridisRGB;
@@ -32,6 +33,21 @@ fn err<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> RsmError {
         what: what.to_string(),
         problem: e.to_string(),
     }
+}
+
+/// The legend, upper left on an opaque box.
+fn legend<'a, 'b: 'a>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    what: &'static str,
+) -> Result<(), RsmError> {
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .label_font((FONT, 12))
+        .background_style(WHITE)
+        .border_style(BLACK)
+        .draw()
+        .map_err(err(what))
 }
 
 /// Contour plot of the surface over the solution's two free factors (the others at their
@@ -186,14 +202,7 @@ pub fn contour_marked_svg(
                 .label(label.as_str())
                 .legend(move |(x, y)| Cross::new((x + 10, y), 5, color.stroke_width(3)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font((FONT, 12))
-            .background_style(WHITE)
-            .border_style(BLACK)
-            .draw()
-            .map_err(err(WHAT))?;
+        legend(&mut chart, WHAT)?;
         root.present().map_err(err(WHAT))?;
     }
     Ok(Some(svg))
@@ -396,14 +405,7 @@ pub fn main_effects_svg(a: &Anova) -> Result<String, RsmError> {
                     PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font((FONT, 12))
-            .background_style(WHITE)
-            .border_style(BLACK)
-            .draw()
-            .map_err(err(WHAT))?;
+        legend(&mut chart, WHAT)?;
         root.present().map_err(err(WHAT))?;
     }
     Ok(svg)

@@ -162,7 +162,9 @@ pub fn solve(
     } else {
         let along: Vec<String> = moving
             .iter()
-            .map(|(name, lo, hi, _)| format!("{name} from {} to {}", sig(*lo), sig(*hi)))
+            .map(|(name, lo, hi, _)| {
+                format!("{name} from {} to {}", significant4(*lo), significant4(*hi))
+            })
             .collect();
         let names: Vec<&str> = moving.iter().map(|m| m.0.as_str()).collect();
         (
@@ -264,16 +266,11 @@ fn describe(names: &[String], values: &[f64]) -> String {
     names
         .iter()
         .zip(values)
-        .map(|(n, v)| format!("{n} = {}", sig(*v)))
+        .map(|(n, v)| format!("{n} = {}", significant4(*v)))
         .collect::<Vec<_>>()
         .join(", ")
 }
 
-/// Four significant digits.
-fn sig(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let d = (3 - v.abs().log10().floor() as i32).clamp(0, 10) as usize;
-    format!("{v:.d$}")
+fn significant4(v: f64) -> String {
+    super::equation::significant(v, 4)
 }
