@@ -168,6 +168,12 @@ fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
     writeln!(out, "setup seconds: {setup:.3}")?;
     writeln!(out, "wall seconds: {secs:.3}")?;
     writeln!(out, "neighbour rebuilds: {}", sim.rebuilds)?;
+    let (touching, _) = sim.contact_counts();
+    writeln!(
+        out,
+        "pairs at the end: {} listed, {touching} carrying force",
+        sim.pair_count()
+    )?;
     writeln!(
         out,
         "final kinetic energy: {:.4e} J",

@@ -88,6 +88,14 @@ impl Jkr {
     /// Contact radius a (m) on the stable branch for overlap `delta` >= delta_c, starting
     /// Newton's method from `s_guess` = sqrt(a) when it is usable.
     pub fn contact_radius(&self, delta: f64, r_eff: f64, s_guess: f64) -> f64 {
+        let s = self.sqrt_contact_radius(delta, r_eff, s_guess);
+        s * s
+    }
+
+    /// s = sqrt(a), m^(1/2): what Newton's method solves for, and all the force needs
+    /// (a = s^2, a^(3/2) = s^3, no square root).
+    #[inline]
+    pub fn sqrt_contact_radius(&self, delta: f64, r_eff: f64, s_guess: f64) -> f64 {
         let cr = self.c * r_eff;
         let dr = delta * r_eff;
         // f'(s) = 4 s^3 - cR > 0 is required for a monotone descent from the right.
@@ -112,7 +120,7 @@ impl Jkr {
                 break;
             }
         }
-        s * s
+        s
     }
 }
 
@@ -122,11 +130,13 @@ impl NormalLaw for Jkr {
         if self.gamma == 0.0 && c.overlap <= 0.0 {
             return NormalForce::default();
         }
-        let a = self.contact_radius(c.overlap, c.r_eff, history[0]);
-        history[0] = a.sqrt();
-        let hertz = 4.0 * self.e_eff * a * a * a / (3.0 * c.r_eff);
+        let s = self.sqrt_contact_radius(c.overlap, c.r_eff, history[0]);
+        history[0] = s;
+        let a = s * s;
+        // 4 E* a^3 / (3 R*) without the division: on the curve a^2 / R* = delta + c sqrt(a).
+        let hertz = 4.0 / 3.0 * self.e_eff * a * (c.overlap + self.c * s);
         NormalForce {
-            elastic: hertz - self.adhesion * a * a.sqrt(),
+            elastic: hertz - self.adhesion * a * s,
             stiffness: 2.0 * self.e_eff * a,
             friction_load: hertz,
             contact_radius: a,
