@@ -1,6 +1,6 @@
 //! The command-line surface.
 
-use crate::commands::{bench, calibrate, compare, laws, reduce, rsm, run, sweep};
+use crate::commands::{bench, calibrate, compare, laws, reduce, rsm, run, sweep, synth};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -28,6 +28,9 @@ pub enum Command {
     Reduce(reduce::ReduceArgs),
     /// Simulate every measured condition of a data file and compare (compare.json/csv/md).
     Compare(compare::CompareArgs),
+    /// Make a measurement file from a truth model plus noise (to test a model against data
+    /// whose missing effect is known).
+    Synth(synth::SynthArgs),
     /// Fit free model parameters to one test's measurements: surface runs, solve, refine
     /// with direct runs, uncertainty; writes a calibrated model file.
     Calibrate(calibrate::CalibrateArgs),
@@ -54,5 +57,6 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Compare(args) => compare::compare(&args, out),
         Command::Rsm { command } => rsm::rsm(&command, out),
         Command::Calibrate(args) => calibrate::calibrate(&args, out),
+        Command::Synth(args) => synth::synth(&args, out),
     }
 }

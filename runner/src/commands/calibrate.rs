@@ -199,10 +199,9 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             );
         }
     }
-    let mut rows: Vec<Measurement> = read_measurements(&args.data)?
-        .into_iter()
-        .filter(|m| m.test == args.test)
-        .collect();
+    let all = read_measurements(&args.data)?;
+    super::measurements::check_against_model(&all, &model, &args.data)?;
+    let mut rows: Vec<Measurement> = all.into_iter().filter(|m| m.test == args.test).collect();
     for f in &args.filters {
         let (k, v) = f
             .split_once('=')

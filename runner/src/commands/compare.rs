@@ -8,6 +8,9 @@
 //! reuses what is done), one sweep per test in `DIR/<test>/`. Writes `DIR/compare.json`,
 //! `compare.csv` and `compare.md`.
 
+use super::measurements::check_against_model;
+pub use super::measurements::{Measurement, read_measurements};
+use crate::lab::model::Model;
 use crate::sweep::execute::{self, Options};
 use crate::sweep::job::{Status, read_summary, run_dir};
 use crate::sweep::plan::{Factor, Plan, PlannedRun};
@@ -47,104 +50,6 @@ pub struct CompareArgs {
     pub quiet: bool,
 }
 
-/// One measurement row.
-#[derive(Debug, Clone, Serialize)]
-pub struct Measurement {
-    pub row: usize,
-    pub test: String,
-    pub conditions: BTreeMap<String, f64>,
-    pub observable: String,
-    pub value: f64,
-    pub unit: String,
-}
-
-const CONDITIONS: [&str; 3] = ["moisture_pct", "firmness_mpa", "normal_pressure_pa"];
-
-/// Reads the measurement CSV; errors name the file, row and column.
-pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
-    let mut lines = text.lines();
-    let head: Vec<&str> = lines
-        .next()
-        .ok_or_else(|| anyhow!("{}: empty file", path.display()))?
-        .split(',')
-        .map(str::trim)
-        .collect();
-    let col = |name: &str| -> Result<usize> {
-        head.iter().position(|h| *h == name).ok_or_else(|| {
-            anyhow!(
-                "{}: no column `{name}` (the header has {})",
-                path.display(),
-                head.join(", ")
-            )
-        })
-    };
-    let (ct, co, cv, cu) = (
-        col("test")?,
-        col("observable")?,
-        col("value")?,
-        col("unit")?,
-    );
-    let mut out = vec![];
-    for (k, line) in lines.enumerate() {
-        let row = k + 2;
-        if line.trim().is_empty() {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let cell = |c: usize| cells.get(c).copied().unwrap_or("");
-        let test = cell(ct).to_string();
-        let observable = cell(co).to_string();
-        let expected = match test.as_str() {
-            "repose" => "repose_angle_deg",
-            "direct_shear" => "peak_shear_force_n",
-            "ucs" => "ucs_kpa",
-            other => bail!(
-                "{}:{row}: test `{other}` is unknown: allowed repose, direct_shear, ucs",
-                path.display()
-            ),
-        };
-        if observable != expected {
-            bail!(
-                "{}:{row}: a {test} test measures `{expected}`, not `{observable}`",
-                path.display()
-            );
-        }
-        let value: f64 = cell(cv).parse().map_err(|_| {
-            anyhow!(
-                "{}:{row}: value `{}` is not a number",
-                path.display(),
-                cell(cv)
-            )
-        })?;
-        let mut conditions = BTreeMap::new();
-        for name in CONDITIONS {
-            if let Ok(c) = col(name) {
-                if !cell(c).is_empty() {
-                    let x: f64 = cell(c).parse().map_err(|_| {
-                        anyhow!(
-                            "{}:{row}: {name} `{}` is not a number",
-                            path.display(),
-                            cell(c)
-                        )
-                    })?;
-                    conditions.insert(name.to_string(), x);
-                }
-            }
-        }
-        out.push(Measurement {
-            row,
-            test,
-            conditions,
-            observable,
-            value,
-            unit: cell(cu).to_string(),
-        });
-    }
-    Ok(out)
-}
-
 /// One line of the comparison.
 #[derive(Debug, Clone, Serialize)]
 pub struct Compared {
@@ -157,7 +62,9 @@ pub struct Compared {
     pub simulated_scatter: Option<f64>,
     pub residual: Option<f64>,
     pub relative_error: Option<f64>,
-    /// residual / scatter, when there is scatter.
+    /// residual / sqrt(scatter^2 / replicates + uncertainty^2): the residual in standard
+    /// errors of the difference, when either the simulation scatter or the measurement's
+    /// uncertainty is known.
     pub z_score: Option<f64>,
     /// Why a replicate has no value.
     pub problems: Vec<String>,
@@ -180,6 +87,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
         bail!("{}: no such model file", args.model.display());
     }
     let rows = read_measurements(&args.data)?;
+    check_against_model(&rows, &Model::load(&args.model)?, &args.data)?;
     let mut tests: Vec<String> = vec![];
     for m in &rows {
         if !tests.contains(&m.test) && (args.tests.is_empty() || args.tests.contains(&m.test)) {
@@ -194,20 +102,75 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
         bail!("--tests: `{t}` is unknown: allowed repose, direct_shear, ucs");
     }
     let stop = execute::stop_on_signals()?;
-    // Plan every test first, so that a bad row stops everything before any run.
+    let rows: Vec<Measurement> = rows
+        .into_iter()
+        .filter(|m| tests.contains(&m.test))
+        .collect();
+    let sims = simulate(
+        &rows,
+        &Simulate {
+            model: &model,
+            data: &args.data,
+            out: &args.out,
+            replicates: args.replicates,
+            first_seed: 1,
+            coarse: args.coarse,
+            cores: args.cores,
+            quiet: args.quiet,
+        },
+        &stop,
+    )?;
+    let compared: Vec<Compared> = rows
+        .into_iter()
+        .zip(sims)
+        .map(|(m, (sims, problems))| summarize(m, sims, problems))
+        .collect();
+    write_outputs(args, &compared, out)
+}
+
+/// How to simulate measurement rows.
+pub struct Simulate<'a> {
+    /// Absolute path of the model file.
+    pub model: &'a Path,
+    /// The rows' file, for errors.
+    pub data: &'a Path,
+    /// One sweep per test goes to `out/<test>/`.
+    pub out: &'a Path,
+    pub replicates: usize,
+    /// Replicate r of every row runs with seed `first_seed + r`.
+    pub first_seed: u64,
+    pub coarse: bool,
+    pub cores: Option<usize>,
+    pub quiet: bool,
+}
+
+/// Simulates every row (its test at its conditions, `replicates` seeds), reusing finished
+/// runs; returns per row the simulated values of the replicates that finished and why the
+/// others have none. Every test is planned before any run starts, so a bad row stops
+/// everything first.
+pub fn simulate(
+    rows: &[Measurement],
+    how: &Simulate,
+    stop: &Arc<AtomicBool>,
+) -> Result<Vec<(Vec<f64>, Vec<String>)>> {
+    let mut tests: Vec<&str> = vec![];
+    for m in rows {
+        if !tests.contains(&m.test.as_str()) {
+            tests.push(&m.test);
+        }
+    }
     let mut plans = vec![];
     for test in &tests {
-        let mine: Vec<&Measurement> = rows.iter().filter(|m| &m.test == test).collect();
         let factors = condition_factors(test);
         let mut runs = vec![];
-        for m in &mine {
-            for r in 0..args.replicates {
+        for m in rows.iter().filter(|m| m.test == *test) {
+            for r in 0..how.replicates {
                 let mut values = BTreeMap::new();
                 for f in &factors {
                     let v = m.conditions.get(&f.name).ok_or_else(|| {
                         anyhow!(
-                            "{}:{}: a {test} row needs `{}`",
-                            args.data.display(),
+                            "{}: row {}: a {test} row needs `{}`",
+                            how.data.display(),
                             m.row,
                             f.name
                         )
@@ -220,22 +183,21 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
                     replicate: r + 1,
                     coded: BTreeMap::new(),
                     values,
-                    seed: 1 + r as u64,
+                    seed: how.first_seed + r as u64,
                 });
             }
         }
-        let text = experiment_text(test, &model, args.coarse);
+        let text = experiment_text(test, how.model, how.coarse);
         let plan = Plan::generated(test, text, Path::new("."), factors, runs)
-            .with_context(|| format!("{}: rows of test {test}", args.data.display()))?;
-        plans.push((test.clone(), plan));
+            .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
+        plans.push((test.to_string(), plan));
     }
-    let mut compared = vec![];
+    let mut by_row: BTreeMap<usize, (Vec<f64>, Vec<String>)> = BTreeMap::new();
     for (test, plan) in &plans {
-        let dir = args.out.join(test);
-        run_generated(plan, &dir, args.cores, args.quiet, &stop)?;
+        let dir = how.out.join(test);
+        run_generated(plan, &dir, how.cores, how.quiet, stop)?;
         for m in rows.iter().filter(|m| &m.test == test) {
-            let mut sims = vec![];
-            let mut problems = vec![];
+            let (sims, problems) = by_row.entry(m.row).or_default();
             for run in plan.runs.iter().filter(|r| r.std == m.row) {
                 let s = read_summary(&run_dir(&dir, run.id));
                 let v = s
@@ -255,10 +217,12 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
                     (_, None) => problems.push(format!("run {}: no summary", run.id)),
                 }
             }
-            compared.push(summarize(m.clone(), sims, problems));
         }
     }
-    write_outputs(args, &compared, out)
+    Ok(rows
+        .iter()
+        .map(|m| by_row.remove(&m.row).unwrap_or_default())
+        .collect())
 }
 
 /// Runs (or resumes) a generated plan into `dir`, pinned, with a progress bar unless `quiet`.
@@ -323,12 +287,10 @@ fn summarize(m: Measurement, sims: Vec<f64>, problems: Vec<String>) -> Compared 
         (sims.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
     });
     let residual = mean.map(|s| s - m.value);
+    let var = scatter.map_or(0.0, |s| s * s / n) + m.uncertainty.map_or(0.0, |u| u * u);
     Compared {
         relative_error: residual.map(|r| r / m.value),
-        z_score: residual
-            .zip(scatter)
-            .filter(|(_, s)| *s > 0.0)
-            .map(|(r, s)| r / s),
+        z_score: residual.filter(|_| var > 0.0).map(|r| r / var.sqrt()),
         measurement: m,
         simulated: sims,
         simulated_mean: mean,

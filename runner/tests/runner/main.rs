@@ -5,6 +5,7 @@ mod config_files;
 mod end_to_end;
 mod experiments;
 mod external;
+mod measurements;
 mod rsm;
 mod sweeps;
 

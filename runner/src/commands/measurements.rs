@@ -1,0 +1,251 @@
+//! Measurement files: one row per measured value (see data/li2022/README.md).
+//!
+//! ```text
+//! test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source
+//! repose,6,,,repose_angle_deg,35.53,deg,0.8,10,table 1
+//! ```
+//!
+//! Everything is checked before any simulation starts, and every error names the file, the
+//! row (1-based, the header is row 1) and the column, with what is allowed: a missing
+//! column, an unknown test or observable, a condition the test needs left empty, a number
+//! that is not one, a non-positive uncertainty or replicate count, and (against a model) a
+//! condition outside the model's range.
+
+use crate::lab::model::Model;
+use anyhow::{Context, Result, anyhow, bail};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The tests tilth simulates, the observable each measures and its unit.
+pub const TESTS: [(&str, &str, &str); 3] = [
+    ("repose", "repose_angle_deg", "deg"),
+    ("direct_shear", "peak_shear_force_n", "N"),
+    ("ucs", "ucs_kpa", "kPa"),
+];
+
+/// Condition columns, in file order.
+pub const CONDITIONS: [&str; 3] = ["moisture_pct", "firmness_mpa", "normal_pressure_pa"];
+
+/// Columns every file must have.
+const REQUIRED: [&str; 4] = ["test", "observable", "value", "unit"];
+
+/// One measurement row.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Measurement {
+    /// Row in the file (the header is row 1).
+    pub row: usize,
+    pub test: String,
+    pub conditions: BTreeMap<String, f64>,
+    pub observable: String,
+    pub value: f64,
+    pub unit: String,
+    /// One standard deviation of the measured value, when known.
+    pub uncertainty: Option<f64>,
+    /// Tests the value averages, when known.
+    pub replicates: Option<u32>,
+    pub source: String,
+}
+
+/// The observable a test measures, or an error listing the tests.
+pub fn observable_of(test: &str) -> Option<(&'static str, &'static str)> {
+    TESTS
+        .iter()
+        .find(|(t, _, _)| *t == test)
+        .map(|(_, o, u)| (*o, *u))
+}
+
+/// The conditions a test needs.
+pub fn conditions_of(test: &str) -> &'static [&'static str] {
+    match test {
+        "repose" => &CONDITIONS[..1],
+        "ucs" => &CONDITIONS[..2],
+        _ => &CONDITIONS[..],
+    }
+}
+
+/// Reads and checks a measurement file.
+pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
+    let file = path.display();
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .flexible(false)
+        .from_path(path)
+        .with_context(|| format!("{file}: cannot read"))?;
+    let head: Vec<String> = reader
+        .headers()
+        .with_context(|| format!("{file}: cannot read the header"))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let missing: Vec<&str> = REQUIRED
+        .iter()
+        .copied()
+        .filter(|c| !head.iter().any(|h| h == c))
+        .collect();
+    if !missing.is_empty() {
+        bail!(
+            "{file}: missing column{} {}; a measurement file needs {} (conditions: {}; optional: uncertainty, replicates, source)",
+            if missing.len() > 1 { "s" } else { "" },
+            missing.join(", "),
+            REQUIRED.join(", "),
+            CONDITIONS.join(", ")
+        );
+    }
+    let allowed: Vec<&str> = REQUIRED
+        .iter()
+        .chain(CONDITIONS.iter())
+        .chain(["uncertainty", "replicates", "source"].iter())
+        .copied()
+        .collect();
+    if let Some(h) = head.iter().find(|h| !allowed.contains(&h.as_str())) {
+        bail!(
+            "{file}: unknown column `{h}`; allowed: {}",
+            allowed.join(", ")
+        );
+    }
+    let col = |name: &str| head.iter().position(|h| h == name);
+    let mut out = vec![];
+    for (k, record) in reader.records().enumerate() {
+        let row = k + 2;
+        let record = record.with_context(|| format!("{file}: row {row}"))?;
+        if record.iter().all(str::is_empty) {
+            continue;
+        }
+        let cell = |name: &str| col(name).and_then(|c| record.get(c)).unwrap_or("");
+        let at = |name: &str| format!("{file}: row {row}, column {name}");
+        let number = |name: &str| -> Result<Option<f64>> {
+            let s = cell(name);
+            if s.is_empty() {
+                return Ok(None);
+            }
+            match s.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(Some(v)),
+                _ => bail!("{}: `{s}` is not a finite number", at(name)),
+            }
+        };
+        let test = cell("test").to_string();
+        let (observable, unit) = observable_of(&test).ok_or_else(|| {
+            anyhow!(
+                "{}: test `{test}` is unknown; allowed: {}",
+                at("test"),
+                TESTS.map(|t| t.0).join(", ")
+            )
+        })?;
+        if cell("observable") != observable {
+            bail!(
+                "{}: a {test} test measures `{observable}`, not `{}`",
+                at("observable"),
+                cell("observable")
+            );
+        }
+        if cell("unit") != unit {
+            bail!(
+                "{}: {observable} is in {unit}, not `{}`",
+                at("unit"),
+                cell("unit")
+            );
+        }
+        let value = number("value")?.ok_or_else(|| anyhow!("{}: empty", at("value")))?;
+        let mut conditions = BTreeMap::new();
+        for name in conditions_of(&test) {
+            if col(name).is_none() {
+                bail!("{file}: no column `{name}`, which a {test} row (row {row}) needs");
+            }
+            let v = number(name)?
+                .ok_or_else(|| anyhow!("{}: empty, but a {test} test needs it", at(name)))?;
+            conditions.insert(name.to_string(), v);
+        }
+        let uncertainty = number("uncertainty")?;
+        if let Some(u) = uncertainty {
+            if u <= 0.0 {
+                bail!(
+                    "{}: {u} is not a standard deviation: allowed > 0, or empty when unknown",
+                    at("uncertainty")
+                );
+            }
+        }
+        let replicates = match cell("replicates") {
+            "" => None,
+            s => match s.parse::<u32>() {
+                Ok(n) if n >= 1 => Some(n),
+                _ => bail!(
+                    "{}: `{s}` is not a count: allowed a whole number >= 1, or empty",
+                    at("replicates")
+                ),
+            },
+        };
+        out.push(Measurement {
+            row,
+            test,
+            conditions,
+            observable: observable.to_string(),
+            value,
+            unit: unit.to_string(),
+            uncertainty,
+            replicates,
+            source: cell("source").to_string(),
+        });
+    }
+    if out.is_empty() {
+        bail!("{file}: no measurement rows");
+    }
+    Ok(out)
+}
+
+/// Checks every row's conditions against the model's ranges (conditions the model does not
+/// declare, such as a test's normal pressure, are the experiment's to check).
+pub fn check_against_model(rows: &[Measurement], model: &Model, path: &Path) -> Result<()> {
+    for m in rows {
+        for (name, v) in &m.conditions {
+            if let Some([lo, hi]) = model.file.conditions.get(name) {
+                if !(lo..=hi).contains(&v) {
+                    bail!(
+                        "{}: row {}, column {name}: {v} is outside the model's range [{lo}, {hi}] ({})",
+                        path.display(),
+                        m.row,
+                        model.path.display()
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Writes rows in the same format (the header of data/li2022/measurements.csv).
+pub fn write_measurements(path: &Path, rows: &[Measurement]) -> Result<()> {
+    let mut w = csv::Writer::from_path(path)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    let mut head: Vec<&str> = vec!["test"];
+    head.extend(CONDITIONS);
+    head.extend([
+        "observable",
+        "value",
+        "unit",
+        "uncertainty",
+        "replicates",
+        "source",
+    ]);
+    w.write_record(&head)?;
+    for m in rows {
+        let mut rec = vec![m.test.clone()];
+        for c in CONDITIONS {
+            rec.push(
+                m.conditions
+                    .get(c)
+                    .map(|v| v.to_string())
+                    .unwrap_or_default(),
+            );
+        }
+        rec.push(m.observable.clone());
+        rec.push(format!("{}", m.value));
+        rec.push(m.unit.clone());
+        rec.push(m.uncertainty.map(|u| u.to_string()).unwrap_or_default());
+        rec.push(m.replicates.map(|n| n.to_string()).unwrap_or_default());
+        rec.push(m.source.clone());
+        w.write_record(&rec)?;
+    }
+    w.flush()?;
+    Ok(())
+}

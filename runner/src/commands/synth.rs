@@ -1,0 +1,262 @@
+//! `tilth synth --truth T.toml --conditions C.csv --noise SPEC --seed S --out D.csv`:
+//! measurements made by a model instead of a laboratory.
+//!
+//! Every row of C.csv (`test` plus the conditions that test needs, as in a measurement file)
+//! is simulated with the truth model, and Gaussian noise of the given standard deviation is
+//! added to the reduced observable. The output has the format of a real measurement file
+//! (data/li2022/README.md), with the noise's standard deviation as `uncertainty`, so that a
+//! model that lacks an effect the truth has can be compared, diagnosed and calibrated
+//! against it exactly as against lab data.
+//!
+//! SPEC gives one standard deviation per observable: `repose_angle_deg=0.5` (absolute, in
+//! the observable's unit) or `peak_shear_force_n=4%` (relative to the simulated value);
+//! `0` adds no noise. The DEM runs use seeds derived from S, and the noise its own stream,
+//! so the same S gives the same file. The runs are kept next to the output
+//! (`D.runs/<test>/`, resumable) unless `--work` says where.
+
+use super::compare::{Simulate, simulate};
+use super::measurements::{
+    CONDITIONS, Measurement, check_against_model, conditions_of, observable_of, write_measurements,
+};
+use crate::lab::model::Model;
+use crate::sweep::execute;
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Args)]
+pub struct SynthArgs {
+    /// The truth: a model file with every effect the data should carry.
+    #[arg(long)]
+    pub truth: PathBuf,
+    /// Conditions to "measure" (CSV: test, moisture_pct, firmness_mpa, normal_pressure_pa;
+    /// other columns, e.g. a measurement file's value, are ignored).
+    #[arg(long)]
+    pub conditions: PathBuf,
+    /// Noise per observable: NAME=SD or NAME=PCT% (comma-separated), e.g.
+    /// repose_angle_deg=0.5,peak_shear_force_n=4%,ucs_kpa=5%.
+    #[arg(long)]
+    pub noise: String,
+    /// Seed of the simulations and of the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The measurement file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Where the truth's runs go (default: next to --out, `<name>.runs/`).
+    #[arg(long)]
+    pub work: Option<PathBuf>,
+    /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
+    #[arg(long)]
+    pub coarse: bool,
+    /// Cores to use (default: all this process may use).
+    #[arg(long)]
+    pub cores: Option<usize>,
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Noise of one observable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Noise {
+    /// Standard deviation in the observable's unit.
+    Absolute(f64),
+    /// Standard deviation as a fraction of the value.
+    Relative(f64),
+}
+
+impl Noise {
+    pub fn sd(self, value: f64) -> f64 {
+        match self {
+            Noise::Absolute(s) => s,
+            Noise::Relative(f) => f * value.abs(),
+        }
+    }
+}
+
+/// Parses `NAME=SD,NAME=PCT%,...`.
+pub fn parse_noise(spec: &str) -> Result<BTreeMap<String, Noise>> {
+    let mut out = BTreeMap::new();
+    for part in spec.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let (name, v) = part
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--noise `{part}`: expected NAME=SD or NAME=PCT%"))?;
+        let (name, v) = (name.trim(), v.trim());
+        if !super::measurements::TESTS.iter().any(|t| t.1 == name) {
+            bail!(
+                "--noise `{part}`: unknown observable `{name}`; allowed: {}",
+                super::measurements::TESTS.map(|t| t.1).join(", ")
+            );
+        }
+        let (num, relative) = match v.strip_suffix('%') {
+            Some(p) => (p.trim(), true),
+            None => (v, false),
+        };
+        let x: f64 = num
+            .parse()
+            .ok()
+            .filter(|x: &f64| x.is_finite() && *x >= 0.0)
+            .ok_or_else(|| {
+                anyhow!("--noise `{part}`: `{v}` is not a standard deviation: allowed a number >= 0, or a percentage")
+            })?;
+        let noise = if relative {
+            Noise::Relative(x / 100.0)
+        } else {
+            Noise::Absolute(x)
+        };
+        if out.insert(name.to_string(), noise).is_some() {
+            bail!("--noise: `{name}` is given twice");
+        }
+    }
+    Ok(out)
+}
+
+/// Reads the conditions file: rows of `test` and its conditions.
+pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
+    let file = path.display();
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("{file}: cannot read"))?;
+    let head: Vec<String> = reader.headers()?.iter().map(str::to_string).collect();
+    let col = |name: &str| head.iter().position(|h| h == name);
+    if col("test").is_none() {
+        bail!(
+            "{file}: no column `test`; a conditions file needs test and the conditions it uses ({})",
+            CONDITIONS.join(", ")
+        );
+    }
+    let mut rows = vec![];
+    for (k, rec) in reader.records().enumerate() {
+        let row = k + 2;
+        let rec = rec.with_context(|| format!("{file}: row {row}"))?;
+        if rec.iter().all(str::is_empty) {
+            continue;
+        }
+        let cell = |name: &str| col(name).and_then(|c| rec.get(c)).unwrap_or("");
+        let test = cell("test").to_string();
+        let (observable, unit) = observable_of(&test).ok_or_else(|| {
+            anyhow!(
+                "{file}: row {row}, column test: `{test}` is unknown; allowed: {}",
+                super::measurements::TESTS.map(|t| t.0).join(", ")
+            )
+        })?;
+        let mut conditions = BTreeMap::new();
+        for name in conditions_of(&test) {
+            if col(name).is_none() {
+                bail!("{file}: no column `{name}`, which a {test} row (row {row}) needs");
+            }
+            let s = cell(name);
+            let v: f64 = s.parse().ok().filter(|v: &f64| v.is_finite()).ok_or_else(|| {
+                anyhow!("{file}: row {row}, column {name}: `{s}` is not a finite number (a {test} test needs it)")
+            })?;
+            conditions.insert(name.to_string(), v);
+        }
+        rows.push(Measurement {
+            row,
+            test,
+            conditions,
+            observable: observable.to_string(),
+            value: f64::NAN,
+            unit: unit.to_string(),
+            uncertainty: None,
+            replicates: Some(1),
+            source: String::new(),
+        });
+    }
+    if rows.is_empty() {
+        bail!("{file}: no rows");
+    }
+    Ok(rows)
+}
+
+pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
+    let truth = std::path::absolute(&args.truth)?;
+    let model = Model::load(&truth)?;
+    let mut rows = read_conditions(&args.conditions)?;
+    check_against_model(&rows, &model, &args.conditions)?;
+    let noise = parse_noise(&args.noise)?;
+    for m in &rows {
+        if !noise.contains_key(&m.observable) {
+            bail!(
+                "--noise gives no standard deviation for {} ({}: row {} is a {} test); add {}=SD",
+                m.observable,
+                args.conditions.display(),
+                m.row,
+                m.test,
+                m.observable
+            );
+        }
+    }
+    let work = args.work.clone().unwrap_or_else(|| {
+        let stem = args
+            .out
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "synth".into());
+        args.out.with_file_name(format!("{stem}.runs"))
+    });
+    let stop = execute::stop_on_signals()?;
+    // Seeds of the truth's runs: a block of its own per --seed.
+    let first_seed = 1 + 1000 * args.seed;
+    let sims = simulate(
+        &rows,
+        &Simulate {
+            model: &truth,
+            data: &args.conditions,
+            out: &work,
+            replicates: 1,
+            first_seed,
+            coarse: args.coarse,
+            cores: args.cores,
+            quiet: args.quiet,
+        },
+        &stop,
+    )?;
+    let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
+    let source = format!(
+        "synth: truth {}, seed {}, noise {}{}",
+        args.truth.display(),
+        args.seed,
+        args.noise,
+        if args.coarse { ", coarse" } else { "" }
+    );
+    for (m, (values, problems)) in rows.iter_mut().zip(sims) {
+        let Some(&v) = values.first() else {
+            bail!(
+                "{}: row {}: the truth's {} run gave no {}: {}",
+                args.conditions.display(),
+                m.row,
+                m.test,
+                m.observable,
+                problems.join("; ")
+            );
+        };
+        let sd = noise[&m.observable].sd(v);
+        let e = if sd > 0.0 {
+            Normal::new(0.0, sd)?.sample(&mut rng)
+        } else {
+            0.0
+        };
+        m.value = v + e;
+        m.uncertainty = (sd > 0.0).then_some(sd);
+        m.source = source.replace(',', ";");
+    }
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    write_measurements(&args.out, &rows)?;
+    writeln!(
+        out,
+        "wrote {} synthetic measurements to {} (truth runs in {})",
+        rows.len(),
+        args.out.display(),
+        work.display()
+    )?;
+    Ok(())
+}

@@ -1,0 +1,203 @@
+//! Measurement files: bad ones are refused before any run, naming row and column; `tilth
+//! synth` writes files in the same format that `compare` reads back.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tilth(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_tilth"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const HEAD: &str = "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source";
+
+/// `compare` on a data file with one bad row: fails, names the file, row and column and
+/// what is allowed, and leaves no run behind.
+fn refused(case: &str, csv: &str, expect: &[&str]) {
+    let dir = scratch(&format!("measurements-{case}"));
+    let data = dir.join("data.csv");
+    std::fs::write(&data, csv).unwrap();
+    let out_dir = dir.join("out");
+    let out = tilth(&[
+        "compare",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--coarse",
+        "--quiet",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{case}: accepted");
+    for e in expect {
+        assert!(err.contains(e), "{case}: `{e}` not in: {err}");
+    }
+    assert!(err.contains("data.csv"), "{case}: file not named: {err}");
+    assert!(!out_dir.exists(), "{case}: runs started before the check");
+}
+
+#[test]
+fn a_missing_column_is_named() {
+    refused(
+        "missing-column",
+        "test,moisture_pct,observable,unit\nrepose,6,repose_angle_deg,deg\n",
+        &["missing column value"],
+    );
+}
+
+#[test]
+fn an_unknown_test_is_named_with_its_row() {
+    refused(
+        "unknown-test",
+        &format!(
+            "{HEAD}\nrepose,6,,,repose_angle_deg,35.5,deg,,,\nheap,6,,,repose_angle_deg,35.5,deg,,,\n"
+        ),
+        &[
+            "row 3, column test",
+            "`heap` is unknown",
+            "allowed: repose, direct_shear, ucs",
+        ],
+    );
+}
+
+#[test]
+fn an_unknown_observable_is_named_with_its_row() {
+    refused(
+        "unknown-observable",
+        &format!("{HEAD}\nucs,6,1.55,,peak_shear_force_n,259,kPa,,,\n"),
+        &["row 2, column observable", "measures `ucs_kpa`"],
+    );
+}
+
+#[test]
+fn a_condition_outside_the_model_is_named_with_the_range() {
+    refused(
+        "outside-range",
+        &format!(
+            "{HEAD}\nrepose,6,,,repose_angle_deg,35.5,deg,,,\nrepose,15,,,repose_angle_deg,40,deg,,,\n"
+        ),
+        &[
+            "row 3, column moisture_pct",
+            "outside the model's range [3, 12]",
+        ],
+    );
+}
+
+#[test]
+fn a_non_positive_uncertainty_is_refused() {
+    for (case, u) in [("zero-uncertainty", "0"), ("negative-uncertainty", "-1.5")] {
+        refused(
+            case,
+            &format!("{HEAD}\nrepose,6,,,repose_angle_deg,35.5,deg,{u},,\n"),
+            &["row 2, column uncertainty", "allowed > 0"],
+        );
+    }
+}
+
+#[test]
+fn a_needed_condition_left_empty_is_named() {
+    refused(
+        "empty-condition",
+        &format!("{HEAD}\nucs,6,,,ucs_kpa,259,kPa,,,\n"),
+        &["row 2, column firmness_mpa", "empty"],
+    );
+}
+
+#[test]
+fn a_value_that_is_not_a_number_is_named() {
+    refused(
+        "not-a-number",
+        &format!("{HEAD}\nrepose,6,,,repose_angle_deg,35.5deg,deg,,,\n"),
+        &["row 2, column value", "not a finite number"],
+    );
+}
+
+/// Noise 0: the file holds exactly what the truth's runs reduced to, and compare reads it
+/// back (a model compared with its own noiseless output at the same seed has no residual).
+/// With noise, the same seed gives the same file and `uncertainty` is the noise's SD.
+#[test]
+fn synth_writes_what_the_truth_simulates_and_compare_reads_it() {
+    let dir = scratch("synth");
+    let cond = dir.join("conditions.csv");
+    std::fs::write(&cond, "test,moisture_pct\nrepose,6\nrepose,12\n").unwrap();
+    let synth = |out: &Path, noise: &str| {
+        let o = tilth(&[
+            "synth",
+            "--truth",
+            "models/li2022.toml",
+            "--conditions",
+            cond.to_str().unwrap(),
+            "--noise",
+            noise,
+            "--seed",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+            "--work",
+            dir.join("runs").to_str().unwrap(),
+            "--coarse",
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read_to_string(out).unwrap()
+    };
+    let exact = synth(&dir.join("exact.csv"), "repose_angle_deg=0");
+    let noisy = synth(&dir.join("noisy.csv"), "repose_angle_deg=2%");
+    let again = synth(&dir.join("again.csv"), "repose_angle_deg=2%");
+    assert_eq!(noisy, again, "same seed, different file");
+    let values = |text: &str, col: usize| -> Vec<String> {
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(col).unwrap().to_string())
+            .collect()
+    };
+    let (ex, no) = (values(&exact, 5), values(&noisy, 5));
+    assert_eq!(values(&exact, 7), vec!["", ""], "no noise, no uncertainty");
+    for (e, n) in ex.iter().zip(&no) {
+        let (e, n): (f64, f64) = (e.parse().unwrap(), n.parse().unwrap());
+        assert_ne!(e, n, "noise not added");
+        assert!(
+            (n - e).abs() < 5.0 * 0.02 * e,
+            "noise far beyond 5 SD: {e} -> {n}"
+        );
+    }
+    for (e, u) in ex.iter().zip(values(&noisy, 7)) {
+        let (e, u): (f64, f64) = (e.parse().unwrap(), u.parse().unwrap());
+        assert!(
+            (u - 0.02 * e).abs() <= 1e-12 * e,
+            "uncertainty {u} is not 2 % of {e}"
+        );
+    }
+
+    // The truth's runs used seed 1 (seed 0's block); compare's first replicate uses seed 1
+    // too, so the model compared with its own exact output has zero residual.
+    let o = tilth(&[
+        "compare",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        dir.join("exact.csv").to_str().unwrap(),
+        "--out",
+        dir.join("compare").to_str().unwrap(),
+        "--coarse",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("compare/compare.json")).unwrap()).unwrap();
+    for row in json["rows"].as_array().unwrap() {
+        assert_eq!(row["residual"].as_f64(), Some(0.0), "{row}");
+    }
+}
