@@ -2,6 +2,7 @@
 //! strength: [`reduce`]) and statistics (experimental designs: [`design`]).
 
 pub mod calibrate;
+pub mod compare;
 pub mod design;
 pub mod reduce;
 pub mod rsm;

@@ -22,6 +22,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use tilth_tools::compare as compare_stats;
+use tilth_tools::compare::plot as compare_plot;
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
@@ -300,6 +302,60 @@ fn summarize(m: Measurement, sims: Vec<f64>, problems: Vec<String>) -> Compared 
     }
 }
 
+/// A compared row as the analysis sees it.
+fn analysis_row(c: &Compared) -> compare_stats::Row {
+    let m = &c.measurement;
+    let n = c.simulated.len().max(1) as f64;
+    let var = c.simulated_scatter.map_or(0.0, |s| s * s / n) + m.uncertainty.map_or(0.0, |u| u * u);
+    compare_stats::Row {
+        test: m.test.clone(),
+        observable: m.observable.clone(),
+        unit: m.unit.clone(),
+        conditions: m.conditions.clone(),
+        measured: m.value,
+        simulated: c.simulated_mean,
+        std_error: (var > 0.0).then(|| var.sqrt()),
+    }
+}
+
+/// Per test: simulated against measured, and the residual against every condition that
+/// varies. Returns the file names written.
+fn write_plots(dir: &Path, rows: &[compare_stats::Row]) -> Result<Vec<String>> {
+    let mut names = vec![];
+    let mut tests: Vec<&str> = vec![];
+    for r in rows {
+        if !tests.contains(&r.test.as_str()) {
+            tests.push(&r.test);
+        }
+    }
+    for test in tests {
+        let mine: Vec<&compare_stats::Row> = rows.iter().filter(|r| r.test == test).collect();
+        if mine.iter().all(|r| r.simulated.is_none()) {
+            continue;
+        }
+        let name = format!("simulated-vs-measured-{test}.svg");
+        let svg = compare_plot::simulated_vs_measured_svg(&mine).map_err(|e| anyhow!(e))?;
+        std::fs::write(dir.join(&name), svg)?;
+        names.push(name);
+        for cond in super::measurements::conditions_of(test) {
+            let mut xs: Vec<f64> = mine
+                .iter()
+                .filter_map(|r| r.conditions.get(*cond).copied())
+                .collect();
+            xs.sort_by(f64::total_cmp);
+            xs.dedup();
+            if xs.len() < 2 {
+                continue;
+            }
+            let name = format!("residual-{test}-{cond}.svg");
+            let svg = compare_plot::residuals_svg(&mine, cond).map_err(|e| anyhow!(e))?;
+            std::fs::write(dir.join(&name), svg)?;
+            names.push(name);
+        }
+    }
+    Ok(names)
+}
+
 fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> Result<()> {
     std::fs::create_dir_all(&args.out)?;
     let mut per_observable: BTreeMap<String, (f64, f64, usize)> = BTreeMap::new();
@@ -322,6 +378,10 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
             )
         })
         .collect();
+    let analysed: Vec<compare_stats::Row> = rows.iter().map(analysis_row).collect();
+    let verdicts = compare_stats::analyse(&analysed);
+    let words = compare_stats::summary(&analysed, &verdicts);
+    let plots = write_plots(&args.out, &analysed)?;
     let json = serde_json::json!({
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
@@ -329,6 +389,9 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
         "replicates": args.replicates,
         "rows": rows,
         "observables": summary,
+        "verdicts": verdicts,
+        "summary": words,
+        "plots": plots,
     });
     std::fs::write(
         args.out.join("compare.json"),
@@ -387,6 +450,10 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
             100.0 * v["mean_relative_error"].as_f64().unwrap_or(f64::NAN),
             v["n"]
         );
+    }
+    md += &format!("\n## Where the model fails\n\n{words}\n");
+    for p in &plots {
+        md += &format!("![{p}]({p})\n");
     }
     std::fs::write(args.out.join("compare.md"), &md)?;
     std::fs::write(args.out.join("compare.csv"), csv)?;

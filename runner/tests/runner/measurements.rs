@@ -200,4 +200,14 @@ fn synth_writes_what_the_truth_simulates_and_compare_reads_it() {
     for row in json["rows"].as_array().unwrap() {
         assert_eq!(row["residual"].as_f64(), Some(0.0), "{row}");
     }
+    // The summary in words and the plots it refers to.
+    let words = json["summary"].as_str().unwrap();
+    assert!(words.contains("RMSE 0.000 deg"), "{words}");
+    assert!(words.contains("No overall bias"), "{words}");
+    for plot in json["plots"].as_array().unwrap() {
+        let svg =
+            std::fs::read_to_string(dir.join("compare").join(plot.as_str().unwrap())).unwrap();
+        assert!(svg.starts_with("<svg"), "{plot}");
+    }
+    assert_eq!(json["plots"].as_array().unwrap().len(), 2);
 }

@@ -1,0 +1,145 @@
+//! SVG plots of a comparison (plotters' SVG backend): simulated against measured with
+//! error bars, and residuals against a condition.
+
+use super::Row;
+use plotters::prelude::*;
+use plotters::style::RGBColor;
+
+const FONT: &str = "sans-serif";
+const BLUE: RGBColor = RGBColor(31, 119, 180);
+const GREY: RGBColor = RGBColor(127, 127, 127);
+
+fn err<E: std::fmt::Display>(what: &str) -> impl Fn(E) -> String + '_ {
+    move |e| format!("{what}: {e}")
+}
+
+/// (lo, hi) padded by 6 % of the span (and never empty).
+fn padded(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = 0.06 * (hi - lo).max(1e-9 * hi.abs().max(1.0));
+    (lo - pad, hi + pad)
+}
+
+/// Simulated mean against measured value for one observable's rows, with the 1:1 line and
+/// bars of +/- one standard error of the residual on the simulated value.
+pub fn simulated_vs_measured_svg(rows: &[&Row]) -> Result<String, String> {
+    let what = "simulated-vs-measured plot";
+    let pts: Vec<(f64, f64, f64)> = rows
+        .iter()
+        .filter_map(|r| Some((r.measured, r.simulated?, r.std_error.unwrap_or(0.0))))
+        .collect();
+    let (lo, hi) = padded(
+        pts.iter()
+            .flat_map(|p| [p.0, p.1 - p.2, p.1 + p.2].into_iter()),
+    );
+    let Some(first) = rows.first() else {
+        return Err(format!("{what}: no rows"));
+    };
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (600, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(err(what))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("{}: simulated vs measured", first.test), (FONT, 17))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(lo..hi, lo..hi)
+            .map_err(err(what))?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("measured {} ({})", first.observable, first.unit))
+            .y_desc(format!("simulated ({})", first.unit))
+            .label_style((FONT, 12))
+            .draw()
+            .map_err(err(what))?;
+        chart
+            .draw_series(LineSeries::new([(lo, lo), (hi, hi)], GREY.stroke_width(1)))
+            .map_err(err(what))?;
+        chart
+            .draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
+                ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, BLUE.stroke_width(1), 8)
+            }))
+            .map_err(err(what))?;
+        chart
+            .draw_series(
+                pts.iter()
+                    .map(|p| Circle::new((p.0, p.1), 4, BLUE.filled())),
+            )
+            .map_err(err(what))?;
+        root.present().map_err(err(what))?;
+    }
+    Ok(svg)
+}
+
+/// Residual (simulated - measured) against `condition` for one observable's rows, with
+/// +/- one standard error bars and the zero line.
+pub fn residuals_svg(rows: &[&Row], condition: &str) -> Result<String, String> {
+    let what = "residual plot";
+    let pts: Vec<(f64, f64, f64)> = rows
+        .iter()
+        .filter_map(|r| {
+            Some((
+                *r.conditions.get(condition)?,
+                r.residual()?,
+                r.std_error.unwrap_or(0.0),
+            ))
+        })
+        .collect();
+    let Some(first) = rows.first() else {
+        return Err(format!("{what}: no rows"));
+    };
+    let (xlo, xhi) = padded(pts.iter().map(|p| p.0));
+    let (ylo, yhi) = padded(
+        pts.iter()
+            .flat_map(|p| [p.1 - p.2, p.1 + p.2, 0.0].into_iter()),
+    );
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (600, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(err(what))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("{}: residual against {condition}", first.test),
+                (FONT, 17),
+            )
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(xlo..xhi, ylo..yhi)
+            .map_err(err(what))?;
+        chart
+            .configure_mesh()
+            .x_desc(condition)
+            .y_desc(format!("simulated - measured ({})", first.unit))
+            .label_style((FONT, 12))
+            .draw()
+            .map_err(err(what))?;
+        chart
+            .draw_series(LineSeries::new(
+                [(xlo, 0.0), (xhi, 0.0)],
+                GREY.stroke_width(1),
+            ))
+            .map_err(err(what))?;
+        chart
+            .draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
+                ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, BLUE.stroke_width(1), 8)
+            }))
+            .map_err(err(what))?;
+        chart
+            .draw_series(
+                pts.iter()
+                    .map(|p| Circle::new((p.0, p.1), 4, BLUE.filled())),
+            )
+            .map_err(err(what))?;
+        root.present().map_err(err(what))?;
+    }
+    Ok(svg)
+}
