@@ -4,5 +4,6 @@
 pub mod calibrate;
 pub mod compare;
 pub mod design;
+pub mod diagnose;
 pub mod reduce;
 pub mod rsm;
