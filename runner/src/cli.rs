@@ -1,6 +1,6 @@
 //! The command-line surface.
 
-use crate::commands::{bench, calibrate, compare, laws, reduce, rsm, run, sweep, synth};
+use crate::commands::{bench, calibrate, compare, diagnose, laws, reduce, rsm, run, sweep, synth};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -28,6 +28,9 @@ pub enum Command {
     Reduce(reduce::ReduceArgs),
     /// Simulate every measured condition of a data file and compare (compare.json/csv/md).
     Compare(compare::CompareArgs),
+    /// Which candidate effect ([candidates] in the model file) explains the residuals: a
+    /// score test per candidate after what the free parameters absorb.
+    Diagnose(diagnose::DiagnoseArgs),
     /// Make a measurement file from a truth model plus noise (to test a model against data
     /// whose missing effect is known).
     Synth(synth::SynthArgs),
@@ -58,5 +61,6 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Rsm { command } => rsm::rsm(&command, out),
         Command::Calibrate(args) => calibrate::calibrate(&args, out),
         Command::Synth(args) => synth::synth(&args, out),
+        Command::Diagnose(args) => diagnose::diagnose(&args, out),
     }
 }

@@ -56,6 +56,10 @@ pub struct Score {
     /// |M j| / |j|: the fraction of the signature the free parameters cannot mimic.
     pub distinct_fraction: f64,
     pub identifiable: bool,
+    /// g theta: what adding the candidate at its estimated strength changes in the
+    /// standardised residuals left after recalibration (zero when not identifiable).
+    #[serde(skip)]
+    pub fitted_change: Vec<f64>,
 }
 
 /// The tests, best first (identifiable candidates by statistic, then the others).
@@ -110,6 +114,7 @@ pub fn score_tests(
                 predicted_chi2_drop: statistic,
                 distinct_fraction: distinct,
                 identifiable,
+                fitted_change: (&g * strength).iter().copied().collect(),
             }
         })
         .collect();
@@ -120,6 +125,29 @@ pub fn score_tests(
             .then(b.statistic.total_cmp(&a.statistic))
     });
     scores
+}
+
+/// M v = v - X X^+ v: what is left of v after least squares on the columns of X (through
+/// the SVD, rank-revealing: a ridge of free parameters is fine).
+fn residual_maker(x: &DMatrix<f64>, v: &DVector<f64>) -> DVector<f64> {
+    if x.ncols() == 0 || x.nrows() == 0 {
+        return v.clone();
+    }
+    let svd = x.clone().svd(true, true);
+    let smax = svd.singular_values.iter().copied().fold(0.0, f64::max);
+    let b = svd
+        .solve(v, 1e-10 * smax.max(1e-300))
+        .expect("both factors computed");
+    v - x * b
+}
+
+/// The standardised residuals left after recalibrating the free parameters (linearised):
+/// M r.
+pub fn absorbed(residual: &[f64], jacobian: &DMatrix<f64>) -> Vec<f64> {
+    residual_maker(jacobian, &DVector::from_column_slice(residual))
+        .iter()
+        .copied()
+        .collect()
 }
 
 /// Holm's step-down correction of `p_raw` into `p_value` (monotone, capped at 1).
@@ -232,6 +260,7 @@ mod tests {
                 predicted_chi2_drop: 0.0,
                 distinct_fraction: 1.0,
                 identifiable: true,
+                fitted_change: vec![],
             })
             .collect();
         holm(&mut s);

@@ -89,7 +89,7 @@ pub struct Param {
     pub high: f64,
 }
 
-fn parse_param(s: &str) -> Result<Param> {
+pub fn parse_param(s: &str) -> Result<Param> {
     let bad = || {
         anyhow!(
             "--param {s:?}: expected PAIR.KEY=LOW:HIGH, e.g. soil-soil.rolling_friction=0.05:0.45"

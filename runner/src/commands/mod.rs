@@ -4,6 +4,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod calibrate_report;
 pub mod compare;
+pub mod diagnose;
 pub mod laws;
 pub mod measurements;
 pub mod reduce;

@@ -46,6 +46,34 @@ pub struct ModelFile {
     pub pairs: BTreeMap<String, BTreeMap<String, Value>>,
     /// Bonds, used only by experiments that form them (direct shear, UCS).
     pub bond: Option<BondModel>,
+    /// Effects the model lacks, for `tilth diagnose`; the lab ignores them.
+    #[serde(default)]
+    pub candidates: BTreeMap<String, CandidateModel>,
+}
+
+/// `[candidates.NAME]`: a physical effect the model might be missing, with a strength
+/// where 0 is the model as it is. Switching it on at strength s adds `extra` (a law of the
+/// extra slot) to the contact model, sets `pairs` (that law's fixed parameters), and adds s
+/// to every parameter in `strength` (`PAIR.KEY`; a missing one counts as 0).
+///
+/// ```toml
+/// [candidates.capillary]
+/// extra = "capillary"
+/// strength = ["soil-soil.surface_tension"]   # N/m; 0 = no liquid bridges
+/// step = 0.02
+/// pairs.soil-soil = { bridge_volume = 5e-13 }
+/// pairs.soil-steel = { bridge_volume = 5e-13, surface_tension = 0.0 }
+/// ```
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CandidateModel {
+    pub description: Option<String>,
+    pub extra: Option<String>,
+    pub strength: Vec<String>,
+    /// Finite-difference step of the strength (its unit is the strength parameters').
+    pub step: f64,
+    #[serde(default)]
+    pub pairs: BTreeMap<String, BTreeMap<String, Value>>,
 }
 
 /// `[bond]`: the bond law and its parameters per material pair.

@@ -127,7 +127,14 @@ impl Jkr {
 impl NormalLaw for Jkr {
     #[inline]
     fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce {
-        if self.gamma == 0.0 && c.overlap <= 0.0 {
+        // In tension the JKR neck exists only if it never broke: it forms on touching
+        // (history set) and breaks for good at delta_c (history cleared). Another law with a
+        // longer reach (a liquid bridge) can keep the pair in contact beyond delta_c, where
+        // the stable branch no longer exists.
+        if c.overlap <= 0.0
+            && (self.gamma == 0.0 || history[0] == 0.0 || c.overlap <= self.critical_overlap(c.r_eff))
+        {
+            history[0] = 0.0;
             return NormalForce::default();
         }
         let s = self.sqrt_contact_radius(c.overlap, c.r_eff, history[0]);

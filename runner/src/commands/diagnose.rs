@@ -1,0 +1,529 @@
+//! `tilth diagnose --model M.toml --data D.csv --out DIR`: which of the model's candidate
+//! effects (`[candidates.NAME]` in the model file) explains where it fails.
+//!
+//! Runs, all with the same seeds (common random numbers) and `--replicates` of them:
+//! the model as it is; the model with each free parameter (`--param PAIR.KEY=LOW:HIGH`)
+//! raised by 5 % of its range; the model with each candidate switched on at its `step`.
+//! Each variant is a model file in `DIR/models/` and a resumable sweep per test in
+//! `DIR/runs/<variant>/`. From the row means: residuals, the free parameters' Jacobian and
+//! each candidate's sensitivity, standardised by each row's standard error
+//! (sqrt(uncertainty^2 + scatter^2 / replicates)); then the score test of
+//! [`tilth_tools::diagnose`]. Writes `DIR/diagnosis.json` (`candidates` best first: `name`,
+//! `statistic`, `p_value`, `strength`, `predicted_rmse_drop`, `identifiable`, ...) and
+//! `DIR/diagnosis.md`, the ranking in words.
+
+use super::calibrate::{Param, parse_param};
+use super::compare::{Simulate, simulate};
+use super::measurements::{Measurement, check_against_model, read_measurements};
+use crate::lab::model::Model;
+use crate::sweep::execute;
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use nalgebra::DMatrix;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use tilth_tools::diagnose::{Candidate, Score, score_tests};
+
+#[derive(Debug, Args)]
+pub struct DiagnoseArgs {
+    /// Model file with `[candidates.NAME]` sections.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Measurements (CSV).
+    #[arg(long)]
+    pub data: PathBuf,
+    #[arg(long)]
+    pub out: PathBuf,
+    /// A free parameter the calibration may move, PAIR.KEY=LOW:HIGH (repeatable): what it
+    /// can absorb is removed before the candidates are tested.
+    #[arg(long = "param")]
+    pub params: Vec<String>,
+    /// Only these candidates (default: all in the model file).
+    #[arg(long, value_delimiter = ',')]
+    pub candidates: Vec<String>,
+    /// Runs per row and variant, with seeds 1, 2, ... shared by every variant.
+    #[arg(long, default_value_t = 3)]
+    pub replicates: usize,
+    /// Corrected p-value below which a candidate is called significant.
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// Only these tests (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub tests: Vec<String>,
+    #[arg(long)]
+    pub coarse: bool,
+    #[arg(long)]
+    pub cores: Option<usize>,
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// A candidate's result, as written.
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnosed {
+    #[serde(flatten)]
+    pub score: Score,
+    pub significant: bool,
+    /// Predicted RMSE drop per observable, in its unit, after adding the candidate at its
+    /// estimated strength and recalibrating the free parameters.
+    pub predicted_rmse_drop: BTreeMap<String, f64>,
+    pub description: Option<String>,
+}
+
+/// Adds `delta` to `pairs.PAIR.KEY` of a model document: a number, each `y` of an
+/// `interpolate` table, or the constant of a `polynomial`; a missing key becomes `delta`.
+fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Result<()> {
+    let (pair, key) = path
+        .split_once('.')
+        .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
+    let table = doc["pairs"][pair]
+        .as_table_like_mut()
+        .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
+    let Some(item) = table.get_mut(key) else {
+        table.insert(key, toml_edit::value(delta));
+        return Ok(());
+    };
+    let v = item
+        .as_value_mut()
+        .ok_or_else(|| anyhow!("pairs.{pair}.{key} is not a value"))?;
+    let num = |v: &toml_edit::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    if let Some(x) = num(v) {
+        *v = (x + delta).into();
+        return Ok(());
+    }
+    if let Some(t) = v.as_inline_table_mut() {
+        let (list, all) = if t.contains_key("interpolate") {
+            ("y", true)
+        } else if t.contains_key("polynomial") {
+            ("coefficients", false)
+        } else {
+            bail!(
+                "pairs.{pair}.{key}: only a number, an interpolate or a polynomial table can be varied"
+            );
+        };
+        let arr = t
+            .get_mut(list)
+            .and_then(|a| a.as_array_mut())
+            .ok_or_else(|| anyhow!("pairs.{pair}.{key}: no `{list}` array"))?;
+        for k in 0..arr.len() {
+            if k > 0 && !all {
+                break;
+            }
+            let x = num(arr.get(k).unwrap())
+                .ok_or_else(|| anyhow!("pairs.{pair}.{key}.{list}[{k}] is not a number"))?;
+            arr.replace(k, x + delta);
+        }
+        return Ok(());
+    }
+    bail!("pairs.{pair}.{key} cannot be varied")
+}
+
+/// The model with candidate `name` switched on at `strength`.
+fn switch_on(
+    doc: &mut toml_edit::DocumentMut,
+    model: &Model,
+    name: &str,
+    strength: f64,
+) -> Result<()> {
+    let c = &model.file.candidates[name];
+    if let Some(law) = &c.extra {
+        let contact = doc["contact"]
+            .as_table_like_mut()
+            .ok_or_else(|| anyhow!("the model has no [contact]"))?;
+        if contact.get("extra").is_none() {
+            contact.insert("extra", toml_edit::value(toml_edit::Array::new()));
+        }
+        let arr = contact
+            .get_mut("extra")
+            .and_then(|e| e.as_array_mut())
+            .ok_or_else(|| anyhow!("contact.extra is not a list"))?;
+        if !arr.iter().any(|v| v.as_str() == Some(law)) {
+            arr.push(law.as_str());
+        }
+    }
+    for (pair, values) in &c.pairs {
+        let table = doc["pairs"][pair.as_str()]
+            .as_table_like_mut()
+            .ok_or_else(|| {
+                anyhow!("candidates.{name}.pairs.{pair}: the model has no [pairs.{pair}]")
+            })?;
+        for (k, v) in values {
+            let parsed: toml_edit::Value = v
+                .to_string()
+                .parse()
+                .with_context(|| format!("candidates.{name}.pairs.{pair}.{k}"))?;
+            table.insert(k, toml_edit::value(parsed));
+        }
+    }
+    for path in &c.strength {
+        add_to(doc, path, strength).with_context(|| format!("candidates.{name}.strength"))?;
+    }
+    Ok(())
+}
+
+/// Writes a variant of the model file and returns its path.
+fn variant(
+    model: &Model,
+    text: &str,
+    dir: &Path,
+    name: &str,
+    edit: impl FnOnce(&mut toml_edit::DocumentMut) -> Result<()>,
+) -> Result<PathBuf> {
+    let mut doc: toml_edit::DocumentMut = text
+        .parse()
+        .with_context(|| format!("{}: not TOML", model.path.display()))?;
+    edit(&mut doc).with_context(|| format!("{}: variant {name}", model.path.display()))?;
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, doc.to_string())?;
+    // Refuse a variant the lab would refuse, before any run.
+    Model::load(&path).with_context(|| format!("variant {name}"))?;
+    Ok(path)
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
+    if args.replicates == 0 {
+        bail!("--replicates 0 is out of range: allowed 1 or more");
+    }
+    if !(args.alpha > 0.0 && args.alpha < 1.0) {
+        bail!("--alpha {} is out of range: allowed (0, 1)", args.alpha);
+    }
+    let model_path = std::path::absolute(&args.model)?;
+    let model = Model::load(&model_path)?;
+    let text = std::fs::read_to_string(&model_path)?;
+    let rows: Vec<Measurement> = read_measurements(&args.data)?
+        .into_iter()
+        .filter(|m| args.tests.is_empty() || args.tests.contains(&m.test))
+        .collect();
+    if rows.is_empty() {
+        bail!("{}: no rows of the tests asked for", args.data.display());
+    }
+    check_against_model(&rows, &model, &args.data)?;
+    let params: Vec<Param> = args
+        .params
+        .iter()
+        .map(|p| parse_param(p))
+        .collect::<Result<_>>()?;
+    let names: Vec<String> = if args.candidates.is_empty() {
+        model.file.candidates.keys().cloned().collect()
+    } else {
+        args.candidates.clone()
+    };
+    if names.is_empty() {
+        bail!(
+            "{}: no [candidates.NAME] sections: nothing to diagnose (see docs/discovery.md)",
+            args.model.display()
+        );
+    }
+    for n in &names {
+        let Some(c) = model.file.candidates.get(n) else {
+            bail!(
+                "--candidates: `{n}` is not in {}; it has {}",
+                args.model.display(),
+                model
+                    .file
+                    .candidates
+                    .keys()
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        };
+        if !(c.step.is_finite() && c.step != 0.0) {
+            bail!(
+                "{}: candidates.{n}.step = {} is out of range: allowed a non-zero number",
+                args.model.display(),
+                c.step
+            );
+        }
+        if c.strength.is_empty() {
+            bail!(
+                "{}: candidates.{n}.strength is empty: name at least one PAIR.KEY",
+                args.model.display()
+            );
+        }
+    }
+
+    // The variants, written and checked before any run.
+    let models_dir = args.out.join("models");
+    std::fs::create_dir_all(&models_dir)?;
+    let mut variants: Vec<(String, PathBuf, f64)> = vec![(
+        "base".into(),
+        variant(&model, &text, &models_dir, "base", |_| Ok(()))?,
+        1.0,
+    )];
+    for p in &params {
+        let h = 0.05 * (p.high - p.low);
+        let name = format!("param-{}.{}", p.pair, p.key);
+        let path = variant(&model, &text, &models_dir, &name, |d| {
+            add_to(d, &format!("{}.{}", p.pair, p.key), h)
+        })?;
+        variants.push((name, path, h));
+    }
+    for n in &names {
+        let step = model.file.candidates[n].step;
+        let name = format!("candidate-{n}");
+        let path = variant(&model, &text, &models_dir, &name, |d| {
+            switch_on(d, &model, n, step)
+        })?;
+        variants.push((name, path, step));
+    }
+
+    let stop = execute::stop_on_signals()?;
+    let mut means: Vec<Vec<Option<f64>>> = vec![];
+    let mut base_scatter: Vec<Option<f64>> = vec![];
+    for (k, (name, path, _)) in variants.iter().enumerate() {
+        if !args.quiet {
+            eprintln!("variant {} of {}: {name}", k + 1, variants.len());
+        }
+        let sims = simulate(
+            &rows,
+            &Simulate {
+                model: path,
+                data: &args.data,
+                out: &args.out.join("runs").join(name),
+                replicates: args.replicates,
+                first_seed: 1,
+                coarse: args.coarse,
+                cores: args.cores,
+                quiet: args.quiet,
+            },
+            &stop,
+        )?;
+        if k == 0 {
+            base_scatter = sims
+                .iter()
+                .map(|(v, _)| {
+                    let m = mean(v)?;
+                    (v.len() >= 2).then(|| {
+                        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64)
+                            .sqrt()
+                    })
+                })
+                .collect();
+        }
+        // Only replicates that finished in every variant would be fairer; a failed run
+        // is reported and its row dropped below.
+        means.push(
+            sims.iter()
+                .map(|(v, _)| {
+                    if v.len() == args.replicates {
+                        mean(v)
+                    } else {
+                        None
+                    }
+                })
+                .collect(),
+        );
+    }
+
+    // Rows usable in every variant, with a standard error.
+    let mut used = vec![];
+    let mut dropped = vec![];
+    for (i, m) in rows.iter().enumerate() {
+        let se2 = m.uncertainty.map_or(0.0, |u| u * u)
+            + base_scatter[i].map_or(0.0, |s| s * s / args.replicates as f64);
+        if means.iter().any(|v| v[i].is_none()) {
+            dropped.push(format!("row {}: a run failed in some variant", m.row));
+        } else if se2 <= 0.0 {
+            dropped.push(format!(
+                "row {}: no uncertainty and no replicate scatter",
+                m.row
+            ));
+        } else {
+            used.push((i, se2.sqrt()));
+        }
+    }
+    if used.is_empty() {
+        bail!(
+            "no row is usable: {} (give uncertainties or --replicates 2 or more)",
+            dropped.join("; ")
+        );
+    }
+    let m = used.len();
+    let residual: Vec<f64> = used
+        .iter()
+        .map(|&(i, s)| (rows[i].value - means[0][i].unwrap()) / s)
+        .collect();
+    let sens = |v: usize| -> Vec<f64> {
+        let h = variants[v].2;
+        used.iter()
+            .map(|&(i, s)| (means[v][i].unwrap() - means[0][i].unwrap()) / h / s)
+            .collect()
+    };
+    let x = DMatrix::from_fn(m, params.len(), |r, c| sens(1 + c)[r]);
+    let candidates: Vec<Candidate> = names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| Candidate {
+            name: n.clone(),
+            sensitivity: sens(1 + params.len() + k),
+        })
+        .collect();
+    let scores = score_tests(&residual, &x, &candidates);
+    let absorbed = tilth_tools::diagnose::absorbed(&residual, &x);
+
+    // Per observable RMSE after recalibration, and after adding each candidate.
+    let rmse_by_obs = |z: &[f64]| -> BTreeMap<String, f64> {
+        let mut acc: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+        for (r, &(i, s)) in used.iter().enumerate() {
+            let e = acc.entry(rows[i].observable.clone()).or_default();
+            e.0 += (z[r] * s).powi(2);
+            e.1 += 1;
+        }
+        acc.into_iter()
+            .map(|(k, (ss, n))| (k, (ss / n as f64).sqrt()))
+            .collect()
+    };
+    let before = rmse_by_obs(&absorbed);
+    let raw: Vec<f64> = residual.clone();
+    let now = rmse_by_obs(&raw);
+    let diagnosed: Vec<Diagnosed> = scores
+        .into_iter()
+        .map(|s| {
+            let after_z: Vec<f64> = absorbed
+                .iter()
+                .zip(&s.fitted_change)
+                .map(|(a, f)| a - f)
+                .collect();
+            let after = rmse_by_obs(&after_z);
+            Diagnosed {
+                significant: s.identifiable && s.p_value < args.alpha,
+                predicted_rmse_drop: before
+                    .iter()
+                    .map(|(k, b)| (k.clone(), b - after[k]))
+                    .collect(),
+                description: model.file.candidates[&s.name].description.clone(),
+                score: s,
+            }
+        })
+        .collect();
+    let json = serde_json::json!({
+        "model": args.model.display().to_string(),
+        "data": args.data.display().to_string(),
+        "replicates": args.replicates,
+        "coarse": args.coarse,
+        "alpha": args.alpha,
+        "free_parameters": params,
+        "rows_used": m,
+        "rows_dropped": dropped,
+        "rmse_now": now,
+        "rmse_after_recalibration": before,
+        "candidates": diagnosed,
+    });
+    std::fs::write(
+        args.out.join("diagnosis.json"),
+        serde_json::to_vec_pretty(&json)?,
+    )?;
+    let md = report(args, &params, &diagnosed, &now, &before, &dropped);
+    std::fs::write(args.out.join("diagnosis.md"), &md)?;
+    out.write_all(md.as_bytes())?;
+    writeln!(
+        out,
+        "\nwritten: {}/diagnosis.{{json,md}}",
+        args.out.display()
+    )?;
+    Ok(())
+}
+
+fn report(
+    args: &DiagnoseArgs,
+    params: &[Param],
+    d: &[Diagnosed],
+    now: &BTreeMap<String, f64>,
+    before: &BTreeMap<String, f64>,
+    dropped: &[String],
+) -> String {
+    let mut md = format!(
+        "# Diagnosis of {} against {}\n\n",
+        args.model.display(),
+        args.data.display()
+    );
+    let free: Vec<String> = params
+        .iter()
+        .map(|p| format!("{}.{}", p.pair, p.key))
+        .collect();
+    md += &format!(
+        "Free parameters: {}. {} replicate{} per run; significance at a Holm-corrected p < {}.\n\n",
+        if free.is_empty() {
+            "none".into()
+        } else {
+            free.join(", ")
+        },
+        args.replicates,
+        if args.replicates == 1 { "" } else { "s" },
+        args.alpha
+    );
+    for (k, v) in now {
+        md += &format!(
+            "- {k}: RMSE now {v:.4}; what recalibrating the free parameters alone would leave: {:.4}\n",
+            before[k]
+        );
+    }
+    md += "\n| rank | candidate | statistic | p (corrected) | strength | RMSE drop | identifiable |\n|---|---|---|---|---|---|---|\n";
+    for (r, c) in d.iter().enumerate() {
+        let drop: Vec<String> = c
+            .predicted_rmse_drop
+            .iter()
+            .map(|(k, v)| format!("{k} {v:.3}"))
+            .collect();
+        md += &format!(
+            "| {} | {} | {:.2} | {} | {:.4} | {} | {} |\n",
+            r + 1,
+            c.score.name,
+            c.score.statistic,
+            tilth_tools::compare::p_text(c.score.p_value).trim_start_matches("= "),
+            c.score.strength,
+            drop.join(", "),
+            if c.score.identifiable {
+                "yes".to_string()
+            } else {
+                format!("no ({:.0} % distinct)", 100.0 * c.score.distinct_fraction)
+            }
+        );
+    }
+    md += "\n";
+    let sig: Vec<&Diagnosed> = d.iter().filter(|c| c.significant).collect();
+    match sig.first() {
+        Some(best) => {
+            md += &format!(
+                "**{}** explains the residuals best: corrected p {}, estimated strength {:.4}. Switch it on with its strength free, recalibrate and compare again.",
+                best.score.name,
+                tilth_tools::compare::p_text(best.score.p_value),
+                best.score.strength
+            );
+            if sig.len() > 1 {
+                md += &format!(
+                    " Also significant: {}; test again after adding the first, as candidates with similar signatures share the same residual.",
+                    sig[1..]
+                        .iter()
+                        .map(|c| c.score.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
+            md += "\n";
+        }
+        None => {
+            md += "No candidate is significant: the residuals are what the free parameters and the noise explain, or the missing effect is none of the candidates.\n";
+        }
+    }
+    for c in d.iter().filter(|c| !c.score.identifiable) {
+        md += &format!(
+            "\n{} is not identifiable from these measurements: once the free parameters are recalibrated, only {:.0} % of its signature is left (the threshold is {:.0} %), so its effect cannot be told from theirs. It is not a discovery.",
+            c.score.name,
+            100.0 * c.score.distinct_fraction,
+            100.0 * tilth_tools::diagnose::MIN_DISTINCT
+        );
+    }
+    if !dropped.is_empty() {
+        md += &format!("\n\nRows left out: {}.", dropped.join("; "));
+    }
+    md += "\n";
+    md
+}
