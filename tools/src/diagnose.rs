@@ -9,8 +9,10 @@
 //!
 //! - g_k = M j_k, the part of the candidate's signature that the free parameters cannot
 //!   mimic;
-//! - score statistic S_k = (g_k . r)^2 / (g_k . g_k), chi^2 with 1 degree of freedom when the
-//!   candidate is absent (r = M eps, eps ~ N(0, I));
+//! - score statistic S_k = (g_k . r)^2 / (g_k . g_k + sum_i (M r)_i^2 v_ki), chi^2 with 1
+//!   degree of freedom when the candidate is absent (r = M eps, eps ~ N(0, I)); v_ki is the
+//!   variance of the estimated sensitivity j_ki (finite differences of noisy runs, which must
+//!   be independent of r: other seeds than the runs that give the residuals);
 //! - p-value corrected for K candidates by Holm's step-down method;
 //! - strength theta_k = (g_k . r) / (g_k . g_k), the one-step estimate;
 //! - predicted drop of the sum of squared standardised residuals: S_k (from |M r|^2 to
@@ -37,6 +39,21 @@ pub struct Candidate {
     pub name: String,
     /// d simulated_i / d theta / sigma_i, one per measurement row.
     pub sensitivity: Vec<f64>,
+    /// Variance of each sensitivity estimate (standardised likewise; empty or zeros when
+    /// exact). Finite differences of noisy simulations are noisy: this noise enters the
+    /// score's variance, so that it is not mistaken for an effect.
+    pub sensitivity_var: Vec<f64>,
+}
+
+/// Why a candidate cannot be tested.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Unidentified {
+    /// The free parameters reproduce all but [`MIN_DISTINCT`] of its signature.
+    Absorbed,
+    /// What is left of its signature is no larger than the noise of its estimate
+    /// (sum of the sensitivity variances): more replicates, or a larger step.
+    Unmeasured,
 }
 
 /// The test of one candidate.
@@ -56,6 +73,8 @@ pub struct Score {
     /// |M j| / |j|: the fraction of the signature the free parameters cannot mimic.
     pub distinct_fraction: f64,
     pub identifiable: bool,
+    /// Why not, when not identifiable.
+    pub unidentified: Option<Unidentified>,
     /// g theta: what adding the candidate at its estimated strength changes in the
     /// standardised residuals left after recalibration (zero when not identifiable).
     #[serde(skip)]
@@ -93,10 +112,24 @@ pub fn score_tests(
             let g = resid_maker(&j);
             let (gg, jj) = (g.dot(&g), j.dot(&j));
             let distinct = if jj > 0.0 { (gg / jj).sqrt() } else { 0.0 };
-            let identifiable = gg > 0.0 && distinct >= MIN_DISTINCT;
+            // Expected |M noise|^2 of the estimated sensitivity: (m - p)/m of its total.
+            let p = jacobian.ncols().min(m) as f64;
+            let noise_energy = c.sensitivity_var.iter().sum::<f64>() * (m as f64 - p) / m as f64;
+            let reason = if jj > 0.0 && distinct < MIN_DISTINCT {
+                Some(Unidentified::Absorbed)
+            } else if gg <= noise_energy || gg == 0.0 {
+                Some(Unidentified::Unmeasured)
+            } else {
+                None
+            };
+            let identifiable = reason.is_none();
             let (statistic, strength) = if identifiable {
                 let gr = g.dot(&r);
-                (gr * gr / gg, gr / gg)
+                let mr = residual_maker(jacobian, &r);
+                let noise: f64 = (0..m)
+                    .map(|i| mr[i] * mr[i] * c.sensitivity_var.get(i).copied().unwrap_or(0.0))
+                    .sum();
+                (gr * gr / (gg + noise), gr / gg)
             } else {
                 (0.0, 0.0)
             };
@@ -114,6 +147,7 @@ pub fn score_tests(
                 predicted_chi2_drop: statistic,
                 distinct_fraction: distinct,
                 identifiable,
+                unidentified: reason,
                 fitted_change: (&g * strength).iter().copied().collect(),
             }
         })
@@ -185,6 +219,7 @@ mod tests {
             .map(|n| Candidate {
                 name: n.to_string(),
                 sensitivity: normal(&mut rng, m),
+                sensitivity_var: vec![],
             })
             .collect();
         let own = normal(&mut rng, m);
@@ -194,6 +229,7 @@ mod tests {
         cands.push(Candidate {
             name: "absorbed".into(),
             sensitivity: absorbed,
+            sensitivity_var: vec![],
         });
         (x, cands)
     }
@@ -241,10 +277,41 @@ mod tests {
         let s = score_tests(&r, &x, &cands);
         let a = s.iter().find(|c| c.name == "absorbed").unwrap();
         assert!(!a.identifiable, "{a:?}");
+        assert_eq!(a.unidentified, Some(Unidentified::Absorbed));
         assert!(a.distinct_fraction < MIN_DISTINCT);
         assert_eq!(a.p_value, 1.0);
         // Nothing else is a discovery either: the free parameters explain the residuals.
         assert!(s.iter().all(|c| c.p_value > 0.01), "{s:?}");
+    }
+
+    /// A sensitivity known only to within twice its size says little: the same residual
+    /// gives a much smaller statistic.
+    #[test]
+    fn a_noisy_sensitivity_weakens_the_test() {
+        let (x, mut cands) = problem(7);
+        let r: Vec<f64> = cands[1].sensitivity.iter().map(|v| 0.8 * v).collect();
+        let exact = score_tests(&r, &x, &cands);
+        cands[1].sensitivity_var = vec![4.0; 24];
+        let noisy = score_tests(&r, &x, &cands);
+        let s = |v: &[Score]| v.iter().find(|c| c.name == "b").unwrap().statistic;
+        assert!(
+            s(&noisy) < 0.5 * s(&exact),
+            "{} vs {}",
+            s(&noisy),
+            s(&exact)
+        );
+    }
+
+    /// A candidate whose estimated signature is all noise is unmeasured, not a finding.
+    #[test]
+    fn a_signature_within_its_noise_is_unmeasured() {
+        let (x, mut cands) = problem(5);
+        cands[0].sensitivity_var = vec![4.0; 24];
+        let r: Vec<f64> = cands[0].sensitivity.iter().map(|v| 3.0 * v).collect();
+        let s = score_tests(&r, &x, &cands);
+        let a = s.iter().find(|c| c.name == "a").unwrap();
+        assert_eq!(a.unidentified, Some(Unidentified::Unmeasured), "{a:?}");
+        assert_eq!(a.p_value, 1.0);
     }
 
     #[test]
@@ -260,6 +327,7 @@ mod tests {
                 predicted_chi2_drop: 0.0,
                 distinct_fraction: 1.0,
                 identifiable: true,
+                unidentified: None,
                 fitted_change: vec![],
             })
             .collect();

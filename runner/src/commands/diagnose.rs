@@ -24,7 +24,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use tilth_tools::diagnose::{Candidate, Score, score_tests};
+use tilth_tools::diagnose::{Candidate, Score, Unidentified, score_tests};
 
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -252,11 +252,14 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     // The variants, written and checked before any run.
     let models_dir = args.out.join("models");
     std::fs::create_dir_all(&models_dir)?;
-    let mut variants: Vec<(String, PathBuf, f64)> = vec![(
-        "base".into(),
-        variant(&model, &text, &models_dir, "base", |_| Ok(()))?,
-        1.0,
-    )];
+    // "base" (seeds 1..R) gives the residuals; "base-fd" (seeds R+1..2R) is the other end
+    // of every finite difference, so that the sensitivities' noise is independent of the
+    // residuals' (sharing runs would correlate them and fake a signal for every candidate).
+    let base = variant(&model, &text, &models_dir, "base", |_| Ok(()))?;
+    let mut variants: Vec<(String, PathBuf, f64)> = vec![
+        ("base".into(), base.clone(), 1.0),
+        ("base-fd".into(), base, 1.0),
+    ];
     for p in &params {
         let h = 0.05 * (p.high - p.low);
         let name = format!("param-{}.{}", p.pair, p.key);
@@ -276,6 +279,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
 
     let stop = execute::stop_on_signals()?;
     let mut means: Vec<Vec<Option<f64>>> = vec![];
+    let mut values: Vec<Vec<Vec<f64>>> = vec![];
     let mut base_scatter: Vec<Option<f64>> = vec![];
     for (k, (name, path, _)) in variants.iter().enumerate() {
         if !args.quiet {
@@ -288,7 +292,11 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                 data: &args.data,
                 out: &args.out.join("runs").join(name),
                 replicates: args.replicates,
-                first_seed: 1,
+                first_seed: if k == 0 {
+                    1
+                } else {
+                    1 + args.replicates as u64
+                },
                 coarse: args.coarse,
                 cores: args.cores,
                 quiet: args.quiet,
@@ -320,6 +328,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                 })
                 .collect(),
         );
+        values.push(sims.into_iter().map(|(v, _)| v).collect());
     }
 
     // Rows usable in every variant, with a standard error.
@@ -350,19 +359,39 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         .iter()
         .map(|&(i, s)| (rows[i].value - means[0][i].unwrap()) / s)
         .collect();
+    // Finite differences against base-fd (variant 1), paired by seed.
     let sens = |v: usize| -> Vec<f64> {
         let h = variants[v].2;
         used.iter()
-            .map(|&(i, s)| (means[v][i].unwrap() - means[0][i].unwrap()) / h / s)
+            .map(|&(i, s)| (means[v][i].unwrap() - means[1][i].unwrap()) / h / s)
             .collect()
     };
-    let x = DMatrix::from_fn(m, params.len(), |r, c| sens(1 + c)[r]);
+    let sens_var = |v: usize| -> Vec<f64> {
+        let h = variants[v].2;
+        used.iter()
+            .map(|&(i, s)| {
+                let d: Vec<f64> = values[v][i]
+                    .iter()
+                    .zip(&values[1][i])
+                    .map(|(a, b)| (a - b) / h / s)
+                    .collect();
+                let n = d.len() as f64;
+                if d.len() < 2 {
+                    return 0.0;
+                }
+                let mu = d.iter().sum::<f64>() / n;
+                d.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (n - 1.0) / n
+            })
+            .collect()
+    };
+    let x = DMatrix::from_fn(m, params.len(), |r, c| sens(2 + c)[r]);
     let candidates: Vec<Candidate> = names
         .iter()
         .enumerate()
         .map(|(k, n)| Candidate {
             name: n.clone(),
-            sensitivity: sens(1 + params.len() + k),
+            sensitivity: sens(2 + params.len() + k),
+            sensitivity_var: sens_var(2 + params.len() + k),
         })
         .collect();
     let scores = score_tests(&residual, &x, &candidates);
@@ -480,10 +509,13 @@ fn report(
             tilth_tools::compare::p_text(c.score.p_value).trim_start_matches("= "),
             c.score.strength,
             drop.join(", "),
-            if c.score.identifiable {
-                "yes".to_string()
-            } else {
-                format!("no ({:.0} % distinct)", 100.0 * c.score.distinct_fraction)
+            match c.score.unidentified {
+                None => "yes".to_string(),
+                Some(Unidentified::Absorbed) => format!(
+                    "no: absorbed ({:.0} % distinct)",
+                    100.0 * c.score.distinct_fraction
+                ),
+                Some(Unidentified::Unmeasured) => "no: within its noise".to_string(),
             }
         );
     }
@@ -514,12 +546,18 @@ fn report(
         }
     }
     for c in d.iter().filter(|c| !c.score.identifiable) {
-        md += &format!(
-            "\n{} is not identifiable from these measurements: once the free parameters are recalibrated, only {:.0} % of its signature is left (the threshold is {:.0} %), so its effect cannot be told from theirs. It is not a discovery.",
-            c.score.name,
-            100.0 * c.score.distinct_fraction,
-            100.0 * tilth_tools::diagnose::MIN_DISTINCT
-        );
+        md += &match c.score.unidentified {
+            Some(Unidentified::Absorbed) => format!(
+                "\n{} is not identifiable from these measurements: once the free parameters are recalibrated, only {:.0} % of its signature is left (the threshold is {:.0} %), so its effect cannot be told from theirs. It is not a discovery.",
+                c.score.name,
+                100.0 * c.score.distinct_fraction,
+                100.0 * tilth_tools::diagnose::MIN_DISTINCT
+            ),
+            _ => format!(
+                "\n{} is not identifiable at this noise: what the free parameters leave of its signature is no larger than the scatter of its finite difference. Run more replicates or a larger step.",
+                c.score.name
+            ),
+        };
     }
     if !dropped.is_empty() {
         md += &format!("\n\nRows left out: {}.", dropped.join("; "));

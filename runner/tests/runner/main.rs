@@ -2,6 +2,7 @@
 
 mod calibrate;
 mod config_files;
+mod diagnose;
 mod end_to_end;
 mod experiments;
 mod external;

@@ -1,0 +1,87 @@
+//! `tilth diagnose` end to end at the coarse preset: a candidate that is the free parameter
+//! itself is reported as absorbed (not identifiable, never significant), and the report has
+//! the fields the issue names.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tilth(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_tilth"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("diagnose-absorbed");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    // The study's model plus a candidate that raises the free parameter itself, by the same
+    // step as its finite difference (5 % of the range 0..0.5 = 0.025, exact in binary).
+    let mut model = std::fs::read_to_string(root.join("models/li2022.toml")).unwrap();
+    model +=
+        "\n[candidates.more_rolling]\nstrength = [\"soil-soil.rolling_friction\"]\nstep = 0.025\n";
+    let model_path = dir.join("model.toml");
+    std::fs::write(&model_path, model).unwrap();
+    let data = dir.join("data.csv");
+    std::fs::write(
+        &data,
+        "test,moisture_pct,observable,value,unit,uncertainty\nrepose,6,repose_angle_deg,35.53,deg,1.0\nrepose,12,repose_angle_deg,43.87,deg,1.0\n",
+    )
+    .unwrap();
+    let out = tilth(&[
+        "diagnose",
+        "--model",
+        model_path.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        dir.join("out").to_str().unwrap(),
+        "--param",
+        "soil-soil.rolling_friction=0:0.5",
+        "--candidates",
+        "more_rolling,capillary",
+        "--replicates",
+        "2",
+        "--coarse",
+        "--cores",
+        "2",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("out/diagnosis.json")).unwrap()).unwrap();
+    let cands = json["candidates"].as_array().unwrap();
+    assert_eq!(cands.len(), 2);
+    for c in cands {
+        for field in [
+            "name",
+            "statistic",
+            "p_value",
+            "strength",
+            "predicted_rmse_drop",
+            "identifiable",
+        ] {
+            assert!(c.get(field).is_some(), "{field} missing in {c}");
+        }
+    }
+    let more = cands.iter().find(|c| c["name"] == "more_rolling").unwrap();
+    assert_eq!(more["identifiable"], false, "{more}");
+    assert_eq!(more["unidentified"], "absorbed", "{more}");
+    assert_eq!(more["significant"], false, "{more}");
+    assert_eq!(more["p_value"].as_f64(), Some(1.0), "{more}");
+    // Identical runs: nothing of its signature is left but rounding.
+    assert!(more["distinct_fraction"].as_f64().unwrap() < 1e-9, "{more}");
+    // Identifiable candidates rank before the others.
+    assert_eq!(cands[1]["name"], "more_rolling");
+    let md = std::fs::read_to_string(dir.join("out/diagnosis.md")).unwrap();
+    assert!(md.contains("more_rolling is not identifiable"), "{md}");
+    assert!(md.contains("It is not a discovery"), "{md}");
+}
