@@ -548,13 +548,13 @@ fn report(
     for c in d.iter().filter(|c| !c.score.identifiable) {
         md += &match c.score.unidentified {
             Some(Unidentified::Absorbed) => format!(
-                "\n{} is not identifiable from these measurements: once the free parameters are recalibrated, only {:.0} % of its signature is left (the threshold is {:.0} %), so its effect cannot be told from theirs. It is not a discovery.",
+                "\n\n{} is not identifiable from these measurements: once the free parameters are recalibrated, only {:.0} % of its signature is left (the threshold is {:.0} %), so its effect cannot be told from theirs. It is not a discovery.",
                 c.score.name,
                 100.0 * c.score.distinct_fraction,
                 100.0 * tilth_tools::diagnose::MIN_DISTINCT
             ),
             _ => format!(
-                "\n{} is not identifiable at this noise: what the free parameters leave of its signature is no larger than the scatter of its finite difference. Run more replicates or a larger step.",
+                "\n\n{} is not identifiable at this noise: what the free parameters leave of its signature is no larger than the scatter of its finite difference. Run more replicates or a larger step.",
                 c.score.name
             ),
         };
