@@ -7,8 +7,8 @@
 //!    normal and the tangential relative velocities;
 //! 3. **tangential**: friction with history and a Coulomb cap (`mindlin`, ...);
 //! 4. **rolling**: rolling-resistance torques (`cdt`, `epsd`);
-//! 5. **extras**: any number of additive normal forces, which may act across a gap
-//!    (`capillary`);
+//! 5. **extras**: any number of additive effects: normal forces, which may act across a
+//!    gap (`capillary`), or torques (`twisting`);
 //! 6. **bond**: at most one bond law (`bond`, a parallel bond), acting on top of the
 //!    contact laws between particle pairs bonded by [`crate::sim::Simulation::form_bonds`],
 //!    also across a gap, until the bond breaks. A scene names it among the extras
@@ -88,9 +88,21 @@ pub trait RollingLaw: Send + Sync {
     ) -> (DVec3, DVec3);
 }
 
-/// Slot 5: an additive normal force (N, positive repulsive), possibly acting across a gap.
+/// Slot 5: an additive effect: a normal force (N, positive repulsive), possibly acting
+/// across a gap, and/or torques on the two particles.
 pub trait ExtraLaw: Send + Sync {
     fn force(&self, c: &Contact, history: &mut [f64]) -> f64;
+    /// Torques on i and on j (N m), given the normal law's output and the Coulomb load (N).
+    /// Most extras act along the normal only.
+    fn torques(
+        &self,
+        _c: &Contact,
+        _normal: &NormalForce,
+        _coulomb_load: f64,
+        _history: &mut [f64],
+    ) -> (DVec3, DVec3) {
+        (DVec3::ZERO, DVec3::ZERO)
+    }
     /// How far beyond touching (m, >= 0) the effect acts for contact radius `r_eff`.
     fn reach(&self, _r_eff: f64) -> f64 {
         0.0

@@ -547,7 +547,11 @@ impl ContactModel {
                 r.torques(c, &normal, coulomb_load, &mut history[l.rolling.clone()]);
         }
         for (x, range) in laws.extras.iter().zip(&l.extras) {
-            f_normal += x.force(c, &mut history[range.clone()]);
+            let h = &mut history[range.clone()];
+            f_normal += x.force(c, h);
+            let (ti, tj) = x.torques(c, &normal, coulomb_load, h);
+            torque_i += ti;
+            torque_j += tj;
         }
         let n = c.normal;
         torque_i += (n * c.arm_i).cross(tangential);

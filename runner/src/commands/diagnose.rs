@@ -187,8 +187,11 @@ fn mean(v: &[f64]) -> Option<f64> {
 }
 
 pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
-    if args.replicates == 0 {
-        bail!("--replicates 0 is out of range: allowed 1 or more");
+    if args.replicates < 2 {
+        bail!(
+            "--replicates {} is out of range: allowed 2 or more (the noise of every finite difference is estimated from the replicates; without it any candidate could look significant)",
+            args.replicates
+        );
     }
     if !(args.alpha > 0.0 && args.alpha < 1.0) {
         bail!("--alpha {} is out of range: allowed (0, 1)", args.alpha);

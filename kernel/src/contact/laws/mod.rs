@@ -22,6 +22,7 @@ registry! {
     cdt,
     epsd,
     capillary,
+    twisting,
     bond,
 }
 
