@@ -341,10 +341,27 @@ impl ReposeProtocol {
 }
 
 impl ReposeProtocol {
-    /// Whether the heap on the tray has grown up to the funnel outlet.
+    /// Whether the heap on the tray has grown up to the funnel outlet: its top is there, and
+    /// there is enough soil below the outlet to build that tall a cone even at 80 degrees
+    /// (V = pi/3 h^3 cot^2 80, at a solid fraction of 0.5). Without the second test, a few
+    /// grains hanging from an arched outlet would pass for a heap that reached it.
     fn reached_outlet(&self, sim: &Simulation) -> bool {
         let h = observe::heap(sim, self.tray);
-        h.height_m >= self.p.drop_height - self.diameter
+        let top = self.p.drop_height - self.diameter;
+        if h.height_m < top {
+            return false;
+        }
+        let p = &sim.particles;
+        let (mut solid, mut below) = (0.0, 0usize);
+        for k in 0..p.len() {
+            if p.position[k].z < self.z_out {
+                solid += 4.0 / 3.0 * std::f64::consts::PI * p.radius[k].powi(3);
+                below += 1;
+            }
+        }
+        let cot = (80f64).to_radians().tan().recip();
+        let cone = std::f64::consts::PI / 3.0 * top.powi(3) * cot * cot;
+        below > 0 && solid >= 0.5 * cone
     }
 
     /// Fails when particles stay in the funnel, at rest, well after the pour (or once what

@@ -188,7 +188,10 @@ fn compare_puts_simulated_next_to_measured_with_errors_from_their_definition() {
         .unwrap();
     let err = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{err}");
-    assert!(err.contains("m.csv:2: test `triaxial` is unknown"), "{err}");
+    assert!(
+        err.contains("m.csv: row 2, column test: test `triaxial` is unknown"),
+        "{err}"
+    );
     assert!(!base.join("bad").exists());
     let _ = std::fs::remove_dir_all(&base);
 }

@@ -23,6 +23,7 @@ registry! {
     epsd,
     capillary,
     twisting,
+    plastic_adhesion,
     bond,
 }
 
