@@ -1,6 +1,8 @@
 //! The command-line surface.
 
-use crate::commands::{bench, calibrate, compare, diagnose, laws, reduce, rsm, run, sweep, synth};
+use crate::commands::{
+    bench, calibrate, compare, diagnose, laws, project_report, reduce, rsm, run, sweep, synth,
+};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -31,6 +33,9 @@ pub enum Command {
     /// Which candidate effect ([candidates] in the model file) explains the residuals: a
     /// score test per candidate after what the free parameters absorb.
     Diagnose(diagnose::DiagnoseArgs),
+    /// Every compare run of a project as a history: errors per model version, the plots
+    /// side by side, one offline HTML page.
+    Report(project_report::ReportArgs),
     /// Make a measurement file from a truth model plus noise (to test a model against data
     /// whose missing effect is known).
     Synth(synth::SynthArgs),
@@ -61,6 +66,7 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Rsm { command } => rsm::rsm(&command, out),
         Command::Calibrate(args) => calibrate::calibrate(&args, out),
         Command::Synth(args) => synth::synth(&args, out),
+        Command::Report(args) => project_report::report(&args, out),
         Command::Diagnose(args) => diagnose::diagnose(&args, out),
     }
 }

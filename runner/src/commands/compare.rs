@@ -382,7 +382,11 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
     let verdicts = compare_stats::analyse(&analysed);
     let words = compare_stats::summary(&analysed, &verdicts);
     let plots = write_plots(&args.out, &analysed)?;
+    let created = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
     let json = serde_json::json!({
+        "created": created,
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
         "coarse": args.coarse,

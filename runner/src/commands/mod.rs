@@ -7,6 +7,7 @@ pub mod compare;
 pub mod diagnose;
 pub mod laws;
 pub mod measurements;
+pub mod project_report;
 pub mod reduce;
 pub mod report;
 pub mod rsm;

@@ -211,3 +211,56 @@ fn synth_writes_what_the_truth_simulates_and_compare_reads_it() {
     }
     assert_eq!(json["plots"].as_array().unwrap().len(), 2);
 }
+
+/// `tilth report`: two compare runs of a project become one offline page, the errors in a
+/// table (a fall marked as better), their plots side by side, nothing fetched.
+#[test]
+fn report_puts_a_projects_compare_runs_side_by_side() {
+    let dir = scratch("report");
+    let svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10\" height=\"10\"><circle cx=\"5\" cy=\"5\" r=\"MARK\"/></svg>";
+    for (name, created, rmse, mark) in [("v1", 1.0, 8.1, "4"), ("v2", 2.0, 2.5, "3")] {
+        let d = dir.join(name);
+        std::fs::create_dir_all(&d).unwrap();
+        std::fs::write(
+            d.join("residual-repose-moisture_pct.svg"),
+            svg.replace("MARK", mark),
+        )
+        .unwrap();
+        let json = serde_json::json!({
+            "created": created,
+            "model": format!("models/{name}.toml"),
+            "data": "d.csv",
+            "replicates": 2,
+            "rows": [],
+            "observables": {"repose_angle_deg": {"rmse": rmse, "mean_relative_error": rmse / 35.0, "n": 4}},
+            "verdicts": [{"observable": "repose_angle_deg", "unit": "deg"}],
+            "summary": format!("- **repose** (repose_angle_deg): RMSE {rmse} deg.\n"),
+            "plots": ["residual-repose-moisture_pct.svg"],
+        });
+        std::fs::write(d.join("compare.json"), json.to_string()).unwrap();
+    }
+    let o = tilth(&["report", dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let v1 = html.find("models/v1.toml").unwrap();
+    let v2 = html.find("models/v2.toml").unwrap();
+    assert!(v1 < v2, "oldest first");
+    assert!(
+        html.contains("<td class=\"better\">2.5000</td>"),
+        "the fall is marked"
+    );
+    assert!(
+        html.contains("r=\"4\"") && html.contains("r=\"3\""),
+        "both runs' plots inlined"
+    );
+    assert!(
+        !html.contains("src=\"http") && !html.contains("href=\"http"),
+        "nothing fetched"
+    );
+    assert!(!html.contains("<script"), "no scripts");
+    // A directory without compare runs is refused with what to do.
+    let empty = scratch("report-empty");
+    let o = tilth(&["report", empty.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no compare run below it"));
+}

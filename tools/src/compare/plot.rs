@@ -143,3 +143,47 @@ pub fn residuals_svg(rows: &[&Row], condition: &str) -> Result<String, String> {
     }
     Ok(svg)
 }
+
+/// RMSE of one observable across a project's compare runs, in order (x: run number).
+pub fn history_svg(observable: &str, unit: &str, rmse: &[f64]) -> Result<String, String> {
+    let what = "history plot";
+    let n = rmse.len();
+    if n == 0 {
+        return Err(format!("{what}: no runs"));
+    }
+    let (_, hi) = padded(rmse.iter().copied().chain([0.0]));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (520, 340)).into_drawing_area();
+        root.fill(&WHITE).map_err(err(what))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("{observable}: RMSE per compare run"), (FONT, 16))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.5..(n as f64 + 0.5), 0.0..hi)
+            .map_err(err(what))?;
+        chart
+            .configure_mesh()
+            .x_desc("compare run (oldest first)")
+            .y_desc(format!("RMSE ({unit})"))
+            .x_labels(n.min(12))
+            .x_label_formatter(&|x| format!("{}", x.round() as i64))
+            .label_style((FONT, 12))
+            .draw()
+            .map_err(err(what))?;
+        let pts: Vec<(f64, f64)> = rmse
+            .iter()
+            .enumerate()
+            .map(|(k, v)| ((k + 1) as f64, *v))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2)))
+            .map_err(err(what))?;
+        chart
+            .draw_series(pts.iter().map(|p| Circle::new(*p, 4, BLUE.filled())))
+            .map_err(err(what))?;
+        root.present().map_err(err(what))?;
+    }
+    Ok(svg)
+}

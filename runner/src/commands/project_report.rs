@@ -1,0 +1,247 @@
+//! `tilth report PROJECT_DIR`: every `tilth compare` run under a project directory as a
+//! history, one HTML page that works offline (`PROJECT_DIR/report.html`).
+//!
+//! The compare runs are found by their `compare.json` (up to four levels down) and ordered by
+//! when they were made (`created`, else the file's modification time). The page has: a table
+//! of the error per observable for each run and model, the RMSE history of every observable
+//! as a chart, each run's summary in words, and each plot of the runs side by side, oldest
+//! first, so that the effect of a model change is seen at a glance. Plots are inlined (SVG);
+//! nothing is fetched.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use tilth_tools::compare::plot::history_svg;
+
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// The project directory: the compare runs are found below it.
+    pub project: PathBuf,
+    /// Where to write the page (default: PROJECT/report.html).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// One compare run.
+struct Entry {
+    dir: PathBuf,
+    label: String,
+    created: f64,
+    json: serde_json::Value,
+}
+
+fn find(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> Result<()> {
+    let file = dir.join("compare.json");
+    if file.is_file() {
+        out.push(file);
+        // A compare run's subdirectories are its sweeps.
+        return Ok(());
+    }
+    if depth == 0 {
+        return Ok(());
+    }
+    let mut subs: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot read", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .collect();
+    subs.sort();
+    for s in subs {
+        find(&s, depth - 1, out)?;
+    }
+    Ok(())
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
+    if !args.project.is_dir() {
+        bail!("{}: not a directory", args.project.display());
+    }
+    let mut files = vec![];
+    find(&args.project, 4, &mut files)?;
+    if files.is_empty() {
+        bail!(
+            "{}: no compare run below it (no compare.json within four levels); run `tilth compare --out {}/NAME ...` first",
+            args.project.display(),
+            args.project.display()
+        );
+    }
+    let mut runs = vec![];
+    for f in files {
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&f)?)
+            .with_context(|| format!("{}: not a compare.json", f.display()))?;
+        let created = json["created"].as_f64().unwrap_or_else(|| {
+            std::fs::metadata(&f)
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                .map_or(0.0, |d| d.as_secs_f64())
+        });
+        let dir = f.parent().unwrap().to_path_buf();
+        let label = dir
+            .strip_prefix(&args.project)
+            .unwrap_or(&dir)
+            .display()
+            .to_string();
+        runs.push(Entry {
+            dir,
+            label: if label.is_empty() { ".".into() } else { label },
+            created,
+            json,
+        });
+    }
+    runs.sort_by(|a, b| a.created.total_cmp(&b.created).then(a.label.cmp(&b.label)));
+
+    // Observables over all runs, with their unit.
+    let mut observables: BTreeMap<String, String> = BTreeMap::new();
+    for r in &runs {
+        for v in r.json["verdicts"].as_array().into_iter().flatten() {
+            if let Some(o) = v["observable"].as_str() {
+                observables.insert(o.into(), v["unit"].as_str().unwrap_or("").into());
+            }
+        }
+        for (o, _) in r.json["observables"].as_object().into_iter().flatten() {
+            observables.entry(o.clone()).or_default();
+        }
+    }
+    let rmse = |r: &Entry, o: &str| r.json["observables"][o]["rmse"].as_f64();
+    let mre = |r: &Entry, o: &str| r.json["observables"][o]["mean_relative_error"].as_f64();
+
+    let mut html = String::from(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tilth report</title>\n<style>\
+         body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}\
+         td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#f3f3f3}\
+         td.l,th.l{text-align:left}.row{display:flex;gap:12px;overflow-x:auto;align-items:flex-start}\
+         .fig{flex:0 0 auto;text-align:center;font-size:13px}.fig svg{max-width:480px;height:auto}\
+         .better{color:#2a7a2a}.worse{color:#b02020}</style></head><body>\n",
+    );
+    html += &format!(
+        "<h1>tilth report: {}</h1>\n<p>{} compare run{}, oldest first. Errors are simulated minus measured.</p>\n",
+        escape(&args.project.display().to_string()),
+        runs.len(),
+        if runs.len() == 1 { "" } else { "s" }
+    );
+
+    html += "<h2>Error per observable</h2>\n<table><tr><th>#</th><th class=\"l\">run</th><th class=\"l\">model</th><th class=\"l\">data</th><th>replicates</th>";
+    for (o, u) in &observables {
+        html += &format!(
+            "<th>{} RMSE ({})</th><th>mean rel. error</th>",
+            escape(o),
+            escape(u)
+        );
+    }
+    html += "</tr>\n";
+    for (k, r) in runs.iter().enumerate() {
+        html += &format!(
+            "<tr><td>{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td>",
+            k + 1,
+            escape(&r.label),
+            escape(r.json["model"].as_str().unwrap_or("?")),
+            escape(r.json["data"].as_str().unwrap_or("?")),
+            r.json["replicates"]
+        );
+        for o in observables.keys() {
+            let now = rmse(r, o);
+            let before = k.checked_sub(1).and_then(|p| rmse(&runs[p], o));
+            let class = match (now, before) {
+                (Some(n), Some(b)) if n < b => " class=\"better\"",
+                (Some(n), Some(b)) if n > b => " class=\"worse\"",
+                _ => "",
+            };
+            html += &format!(
+                "<td{class}>{}</td><td>{}</td>",
+                now.map_or("-".into(), |v| format!("{v:.4}")),
+                mre(r, o).map_or("-".into(), |v| format!("{:.1} %", 100.0 * v))
+            );
+        }
+        html += "</tr>\n";
+    }
+    html += "</table>\n";
+
+    html += "<h2>RMSE history</h2>\n<div class=\"row\">\n";
+    for (o, u) in &observables {
+        let values: Vec<f64> = runs
+            .iter()
+            .map(|r| rmse(r, o).unwrap_or(f64::NAN))
+            .collect();
+        if values.iter().all(|v| v.is_nan()) {
+            continue;
+        }
+        let svg = history_svg(o, u, &values).map_err(anyhow::Error::msg)?;
+        html += &format!("<div class=\"fig\">{svg}</div>\n");
+    }
+    html += "</div>\n";
+
+    html += "<h2>Where each model fails</h2>\n";
+    for (k, r) in runs.iter().enumerate() {
+        html += &format!("<h3>{}. {}</h3>\n", k + 1, escape(&r.label));
+        match r.json["summary"].as_str() {
+            Some(s) => {
+                html += "<ul>\n";
+                for line in s.lines().filter(|l| !l.trim().is_empty()) {
+                    let text = line.trim_start_matches("- ").replace("**", "");
+                    html += &format!("<li>{}</li>\n", escape(&text));
+                }
+                html += "</ul>\n";
+            }
+            None => html += "<p>(made before compare wrote summaries)</p>\n",
+        }
+    }
+
+    // Plots by name, the runs side by side.
+    let mut names: Vec<String> = vec![];
+    for r in &runs {
+        for p in r.json["plots"].as_array().into_iter().flatten() {
+            if let Some(p) = p.as_str() {
+                if !names.iter().any(|n| n == p) {
+                    names.push(p.into());
+                }
+            }
+        }
+    }
+    html += "<h2>Plots, run by run</h2>\n";
+    for name in &names {
+        html += &format!("<h3>{}</h3>\n<div class=\"row\">\n", escape(name));
+        for (k, r) in runs.iter().enumerate() {
+            let file = r.dir.join(name);
+            let Ok(svg) = std::fs::read_to_string(&file) else {
+                continue;
+            };
+            // The plots are tilth's own SVG; strip an XML prolog if there is one.
+            let svg = svg.trim_start_matches(|c| c != '<');
+            let svg = if svg.starts_with("<?xml") {
+                svg.split_once("?>").map_or(svg, |(_, rest)| rest)
+            } else {
+                svg
+            };
+            html += &format!(
+                "<div class=\"fig\">{svg}<br>{}. {}</div>\n",
+                k + 1,
+                escape(&r.label)
+            );
+        }
+        html += "</div>\n";
+    }
+    html += "</body></html>\n";
+
+    let path = args
+        .out
+        .clone()
+        .unwrap_or_else(|| args.project.join("report.html"));
+    std::fs::write(&path, html).with_context(|| format!("{}: cannot write", path.display()))?;
+    writeln!(
+        out,
+        "{} compare runs -> {} (open it in a browser; it needs no network)",
+        runs.len(),
+        path.display()
+    )?;
+    Ok(())
+}
