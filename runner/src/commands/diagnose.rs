@@ -283,6 +283,8 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     let stop = execute::stop_on_signals()?;
     let mut means: Vec<Vec<Option<f64>>> = vec![];
     let mut values: Vec<Vec<Vec<f64>>> = vec![];
+    // The first reason a row has no value in some variant.
+    let mut problems: BTreeMap<usize, String> = BTreeMap::new();
     let mut base_scatter: Vec<Option<f64>> = vec![];
     for (k, (name, path, _)) in variants.iter().enumerate() {
         if !args.quiet {
@@ -331,6 +333,13 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                 })
                 .collect(),
         );
+        for (i, (_, why)) in sims.iter().enumerate() {
+            if let Some(first) = why.first() {
+                problems
+                    .entry(i)
+                    .or_insert_with(|| format!("{name}, {first}"));
+            }
+        }
         values.push(sims.into_iter().map(|(v, _)| v).collect());
     }
 
@@ -341,7 +350,11 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         let se2 = m.uncertainty.map_or(0.0, |u| u * u)
             + base_scatter[i].map_or(0.0, |s| s * s / args.replicates as f64);
         if means.iter().any(|v| v[i].is_none()) {
-            dropped.push(format!("row {}: a run failed in some variant", m.row));
+            dropped.push(format!(
+                "row {}: a run failed ({})",
+                m.row,
+                problems.get(&i).map_or("no value", String::as_str)
+            ));
         } else if se2 <= 0.0 {
             dropped.push(format!(
                 "row {}: no uncertainty and no replicate scatter",
