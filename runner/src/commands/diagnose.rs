@@ -120,6 +120,73 @@ fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Result<()
     bail!("pairs.{pair}.{key} cannot be varied")
 }
 
+/// Adds `slope * (c - mid)` to `pairs.PAIR.KEY` along condition `c` (mid the middle of its
+/// range [lo, hi]): a number becomes an `interpolate` table over [lo, hi]; an `interpolate`
+/// table over `c` gets the slope added at each of its points.
+fn add_slope(
+    doc: &mut toml_edit::DocumentMut,
+    path: &str,
+    cond: &str,
+    lo: f64,
+    hi: f64,
+    slope: f64,
+) -> Result<()> {
+    let (pair, key) = path
+        .split_once('.')
+        .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
+    let mid = 0.5 * (lo + hi);
+    let table = doc["pairs"][pair]
+        .as_table_like_mut()
+        .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
+    let num = |v: &toml_edit::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    let current = table.get(key).and_then(|i| i.as_value().cloned());
+    let base = match &current {
+        None => Some(0.0),
+        Some(v) => num(v),
+    };
+    if let Some(b) = base {
+        let mut t = toml_edit::InlineTable::new();
+        t.insert("interpolate", cond.into());
+        t.insert("x", toml_edit::Value::Array([lo, hi].into_iter().collect()));
+        t.insert(
+            "y",
+            toml_edit::Value::Array(
+                [b + slope * (lo - mid), b + slope * (hi - mid)]
+                    .into_iter()
+                    .collect(),
+            ),
+        );
+        table.insert(key, toml_edit::value(t));
+        return Ok(());
+    }
+    let mut v = current.unwrap();
+    let t = v
+        .as_inline_table_mut()
+        .filter(|t| t.get("interpolate").and_then(|c| c.as_str()) == Some(cond))
+        .ok_or_else(|| {
+            anyhow!("pairs.{pair}.{key}: only a number or an interpolate table over {cond} can take a slope along {cond}")
+        })?;
+    let xs: Vec<f64> = t
+        .get("x")
+        .and_then(|a| a.as_array())
+        .map(|a| a.iter().filter_map(num).collect())
+        .unwrap_or_default();
+    let ys = t
+        .get_mut("y")
+        .and_then(|a| a.as_array_mut())
+        .ok_or_else(|| anyhow!("pairs.{pair}.{key}: no `y` array"))?;
+    if xs.len() != ys.len() {
+        bail!("pairs.{pair}.{key}: x and y differ in length");
+    }
+    for (k, x) in xs.iter().enumerate() {
+        let y = num(ys.get(k).unwrap())
+            .ok_or_else(|| anyhow!("pairs.{pair}.{key}.y[{k}] is not a number"))?;
+        ys.replace(k, y + slope * (x - mid));
+    }
+    table.insert(key, toml_edit::value(v));
+    Ok(())
+}
+
 /// The model with candidate `name` switched on at `strength`.
 fn switch_on(
     doc: &mut toml_edit::DocumentMut,
@@ -158,7 +225,19 @@ fn switch_on(
         }
     }
     for path in &c.strength {
-        add_to(doc, path, strength).with_context(|| format!("candidates.{name}.strength"))?;
+        match &c.along {
+            None => add_to(doc, path, strength),
+            Some(cond) => {
+                let [lo, hi] = *model.file.conditions.get(cond).ok_or_else(|| {
+                    anyhow!(
+                        "candidates.{name}.along = \"{cond}\": the model has no such condition; it has {}",
+                        model.file.conditions.keys().cloned().collect::<Vec<_>>().join(", ")
+                    )
+                })?;
+                add_slope(doc, path, cond, lo, hi, strength)
+            }
+        }
+        .with_context(|| format!("candidates.{name}.strength"))?;
     }
     Ok(())
 }
@@ -580,4 +659,84 @@ fn report(
     }
     md += "\n";
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc() -> toml_edit::DocumentMut {
+        "[pairs.soil-soil]\nfriction = 0.8\nrolling = { interpolate = \"moisture_pct\", x = [3, 6, 12], y = [0.1, 0.2, 0.4] }\npoly = { polynomial = \"moisture_pct\", coefficients = [1.0, 2.0] }\n"
+            .parse()
+            .unwrap()
+    }
+
+    fn value(d: &toml_edit::DocumentMut, key: &str) -> String {
+        d["pairs"]["soil-soil"][key].as_value().unwrap().to_string()
+    }
+
+    #[test]
+    fn add_to_raises_numbers_tables_and_polynomial_constants() {
+        let mut d = doc();
+        add_to(&mut d, "soil-soil.friction", 0.25).unwrap();
+        add_to(&mut d, "soil-soil.rolling", 0.5).unwrap();
+        add_to(&mut d, "soil-soil.poly", 0.5).unwrap();
+        add_to(&mut d, "soil-soil.new_key", 0.125).unwrap();
+        assert_eq!(d["pairs"]["soil-soil"]["friction"].as_float(), Some(1.05));
+        assert!(
+            value(&d, "rolling").contains("y = [0.6, 0.7, 0.9]"),
+            "{}",
+            value(&d, "rolling")
+        );
+        assert!(
+            value(&d, "poly").contains("coefficients = [1.5, 2.0]"),
+            "{}",
+            value(&d, "poly")
+        );
+        assert_eq!(d["pairs"]["soil-soil"]["new_key"].as_float(), Some(0.125));
+        assert!(add_to(&mut d, "soil-steel.friction", 0.1).is_err());
+    }
+
+    fn ys(d: &toml_edit::DocumentMut, key: &str) -> Vec<f64> {
+        d["pairs"]["soil-soil"][key]["y"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_float().unwrap())
+            .collect()
+    }
+
+    fn close(a: &[f64], b: &[f64]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+    }
+
+    #[test]
+    fn add_slope_tilts_about_the_middle_of_the_range() {
+        let mut d = doc();
+        // Range [3, 12], middle 7.5: a number becomes a two-point table.
+        add_slope(
+            &mut d,
+            "soil-soil.friction",
+            "moisture_pct",
+            3.0,
+            12.0,
+            0.02,
+        )
+        .unwrap();
+        assert!(value(&d, "friction").contains("x = [3.0, 12.0]"));
+        assert!(
+            close(&ys(&d, "friction"), &[0.8 - 0.09, 0.8 + 0.09]),
+            "{:?}",
+            ys(&d, "friction")
+        );
+        // A table over the same condition: each point tilted (3: -0.09, 6: -0.03, 12: +0.09).
+        add_slope(&mut d, "soil-soil.rolling", "moisture_pct", 3.0, 12.0, 0.02).unwrap();
+        assert!(
+            close(&ys(&d, "rolling"), &[0.1 - 0.09, 0.2 - 0.03, 0.4 + 0.09]),
+            "{:?}",
+            ys(&d, "rolling")
+        );
+        // A polynomial cannot take a slope.
+        assert!(add_slope(&mut d, "soil-soil.poly", "moisture_pct", 3.0, 12.0, 0.02).is_err());
+    }
 }

@@ -70,6 +70,10 @@ pub struct CandidateModel {
     pub description: Option<String>,
     pub extra: Option<String>,
     pub strength: Vec<String>,
+    /// A condition (e.g. `moisture_pct`): the strength is then a slope along it, each
+    /// strength parameter changing by strength x (condition - the middle of its range), so
+    /// that 0 is still the model as it is.
+    pub along: Option<String>,
     /// Finite-difference step of the strength (its unit is the strength parameters').
     pub step: f64,
     #[serde(default)]
