@@ -1,16 +1,9 @@
 //! `tilth calibrate` end to end at the coarse preset, one moisture, one seed: the runs, the
 //! ridge statement, the uncertainty and a calibrated model file that the lab accepts.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
-fn tilth(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_tilth"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .unwrap()
-}
+use crate::tilth_in_root as tilth;
 
 #[test]
 fn calibrate_repose_at_one_moisture() {

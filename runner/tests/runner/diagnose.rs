@@ -3,15 +3,8 @@
 //! the fields the issue names.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn tilth(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_tilth"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .unwrap()
-}
+use crate::tilth_in_root as tilth;
 
 #[test]
 fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {

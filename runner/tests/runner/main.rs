@@ -10,7 +10,18 @@ mod measurements;
 mod rsm;
 mod sweeps;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the `tilth` binary from the repository root (so that paths like
+/// `models/li2022.toml` resolve) and waits for it.
+pub fn tilth_in_root(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tilth"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .unwrap()
+}
 
 /// `runner/tests/configs/<dir>`.
 pub fn configs(dir: &str) -> PathBuf {

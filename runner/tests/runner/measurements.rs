@@ -2,15 +2,8 @@
 //! synth` writes files in the same format that `compare` reads back.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn tilth(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_tilth"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .unwrap()
-}
+use crate::tilth_in_root as tilth;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);

@@ -1,16 +1,9 @@
 //! `tilth rsm` from the command line: the JSON contract, the published-table check, solving
 //! and its pictures, and refusals.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
 
-fn tilth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tilth"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .unwrap()
-}
+use crate::tilth_in_root as tilth;
 
 const T6: &str = "sweeps/li2022/data/table06_pb_runs.csv";
 const T7: &str = "sweeps/li2022/data/table07_pb_anova_reported.csv";

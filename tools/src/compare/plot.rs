@@ -27,6 +27,30 @@ fn padded(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// Points (x, y, sd) with +/- sd bars where sd > 0.
+fn points_with_bars(
+    chart: &mut ChartContext<
+        '_,
+        SVGBackend<'_>,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    pts: &[(f64, f64, f64)],
+    what: &str,
+) -> Result<(), String> {
+    chart
+        .draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
+            ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, BLUE.stroke_width(1), 8)
+        }))
+        .map_err(err(what))?;
+    chart
+        .draw_series(
+            pts.iter()
+                .map(|p| Circle::new((p.0, p.1), 4, BLUE.filled())),
+        )
+        .map_err(err(what))?;
+    Ok(())
+}
+
 /// Simulated mean against measured value for one observable's rows, with the 1:1 line and
 /// bars of +/- one standard error of the residual on the simulated value.
 pub fn simulated_vs_measured_svg(rows: &[&Row]) -> Result<String, String> {
@@ -63,17 +87,7 @@ pub fn simulated_vs_measured_svg(rows: &[&Row]) -> Result<String, String> {
         chart
             .draw_series(LineSeries::new([(lo, lo), (hi, hi)], GREY.stroke_width(1)))
             .map_err(err(what))?;
-        chart
-            .draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
-                ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, BLUE.stroke_width(1), 8)
-            }))
-            .map_err(err(what))?;
-        chart
-            .draw_series(
-                pts.iter()
-                    .map(|p| Circle::new((p.0, p.1), 4, BLUE.filled())),
-            )
-            .map_err(err(what))?;
+        points_with_bars(&mut chart, &pts, what)?;
         root.present().map_err(err(what))?;
     }
     Ok(svg)
@@ -128,17 +142,7 @@ pub fn residuals_svg(rows: &[&Row], condition: &str) -> Result<String, String> {
                 GREY.stroke_width(1),
             ))
             .map_err(err(what))?;
-        chart
-            .draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
-                ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, BLUE.stroke_width(1), 8)
-            }))
-            .map_err(err(what))?;
-        chart
-            .draw_series(
-                pts.iter()
-                    .map(|p| Circle::new((p.0, p.1), 4, BLUE.filled())),
-            )
-            .map_err(err(what))?;
+        points_with_bars(&mut chart, &pts, what)?;
         root.present().map_err(err(what))?;
     }
     Ok(svg)
