@@ -94,9 +94,16 @@ pub fn read_summary(dir: &Path) -> Option<RunSummary> {
     serde_json::from_str(&text).ok()
 }
 
-/// Writes `path` atomically (a temporary file renamed over it).
+/// Writes `path` atomically (a temporary file renamed over it). The temporary name is unique
+/// to the process and the call: shards of one sweep (Slurm array tasks started together)
+/// write the same files into one directory, and a shared temporary name let one shard rename
+/// away the other's file before its own rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension("tmp");
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(format!(".{}.{n}.tmp", std::process::id()));
+    let tmp = path.with_file_name(name);
     std::fs::write(&tmp, bytes).with_context(|| format!("{}: cannot write", tmp.display()))?;
     std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
 }
