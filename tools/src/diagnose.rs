@@ -89,16 +89,8 @@ pub fn score_tests(
 ) -> Vec<Score> {
     let m = residual.len();
     let r = DVector::from_column_slice(residual);
-    let resid_maker = |v: &DVector<f64>| -> DVector<f64> {
-        if jacobian.ncols() == 0 {
-            return v.clone();
-        }
-        // Least squares of v on X through the SVD (rank-revealing: a ridge of free
-        // parameters is fine), then v - X b.
-        let svd = jacobian.clone().svd(true, true);
-        let b = svd.solve(v, 1e-10).expect("both factors computed");
-        v - jacobian * b
-    };
+    let maker = ResidualMaker::new(jacobian);
+    let mr = maker.apply(&r);
     let mut scores: Vec<Score> = candidates
         .iter()
         .map(|c| {
@@ -109,7 +101,7 @@ pub fn score_tests(
                 c.name
             );
             let j = DVector::from_column_slice(&c.sensitivity);
-            let g = resid_maker(&j);
+            let g = maker.apply(&j);
             let (gg, jj) = (g.dot(&g), j.dot(&j));
             let distinct = if jj > 0.0 { (gg / jj).sqrt() } else { 0.0 };
             // Expected |M noise|^2 of the estimated sensitivity: (m - p)/m of its total.
@@ -125,7 +117,6 @@ pub fn score_tests(
             let identifiable = reason.is_none();
             let (statistic, strength) = if identifiable {
                 let gr = g.dot(&r);
-                let mr = residual_maker(jacobian, &r);
                 let noise: f64 = (0..m)
                     .map(|i| mr[i] * mr[i] * c.sensitivity_var.get(i).copied().unwrap_or(0.0))
                     .sum();
@@ -162,23 +153,42 @@ pub fn score_tests(
 }
 
 /// M v = v - X X^+ v: what is left of v after least squares on the columns of X (through
-/// the SVD, rank-revealing: a ridge of free parameters is fine).
-fn residual_maker(x: &DMatrix<f64>, v: &DVector<f64>) -> DVector<f64> {
-    if x.ncols() == 0 || x.nrows() == 0 {
-        return v.clone();
+/// the SVD, rank-revealing: a ridge of free parameters is fine). X is decomposed once.
+struct ResidualMaker<'a> {
+    x: &'a DMatrix<f64>,
+    svd: Option<nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>>,
+    tolerance: f64,
+}
+
+impl<'a> ResidualMaker<'a> {
+    fn new(x: &'a DMatrix<f64>) -> Self {
+        let svd = (x.ncols() > 0 && x.nrows() > 0).then(|| x.clone().svd(true, true));
+        let smax = svd.as_ref().map_or(0.0, |s| {
+            s.singular_values.iter().copied().fold(0.0, f64::max)
+        });
+        ResidualMaker {
+            x,
+            svd,
+            tolerance: 1e-10 * smax.max(1e-300),
+        }
     }
-    let svd = x.clone().svd(true, true);
-    let smax = svd.singular_values.iter().copied().fold(0.0, f64::max);
-    let b = svd
-        .solve(v, 1e-10 * smax.max(1e-300))
-        .expect("both factors computed");
-    v - x * b
+
+    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
+        match &self.svd {
+            None => v.clone(),
+            Some(svd) => {
+                let b = svd.solve(v, self.tolerance).expect("both factors computed");
+                v - self.x * b
+            }
+        }
+    }
 }
 
 /// The standardised residuals left after recalibrating the free parameters (linearised):
 /// M r.
 pub fn absorbed(residual: &[f64], jacobian: &DMatrix<f64>) -> Vec<f64> {
-    residual_maker(jacobian, &DVector::from_column_slice(residual))
+    ResidualMaker::new(jacobian)
+        .apply(&DVector::from_column_slice(residual))
         .iter()
         .copied()
         .collect()
