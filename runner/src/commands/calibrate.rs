@@ -22,7 +22,8 @@
 
 use super::calibrate_report;
 use super::compare::{
-    Measurement, condition_factors, experiment_text, factor, read_measurements, run_generated,
+    Measurement, condition_factors, experiment_text, factor, mean_sd, read_measurements,
+    run_generated,
 };
 use crate::lab::model::{Model, evaluate};
 use crate::sweep::execute;
@@ -148,14 +149,6 @@ pub struct Iteration {
     pub mean: f64,
     pub sd: Option<f64>,
     pub error_pct: f64,
-}
-
-fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let sd =
-        (v.len() > 1).then(|| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt());
-    (m, sd)
 }
 
 pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {

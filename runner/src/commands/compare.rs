@@ -281,18 +281,31 @@ pub fn factor(name: &str, target: &str) -> Factor {
     }
 }
 
+/// Mean and sample standard deviation (`None` below two values) of `v`.
+pub fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let sd =
+        (v.len() > 1).then(|| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt());
+    (m, sd)
+}
+
+/// Standard error of (simulated mean - measured): sqrt(scatter^2 / replicates +
+/// uncertainty^2), when either is known.
+pub fn std_error(scatter: Option<f64>, replicates: usize, uncertainty: Option<f64>) -> Option<f64> {
+    let var = scatter.map_or(0.0, |s| s * s / replicates.max(1) as f64)
+        + uncertainty.map_or(0.0, |u| u * u);
+    (var > 0.0).then(|| var.sqrt())
+}
+
 fn summarize(m: Measurement, sims: Vec<f64>, problems: Vec<String>) -> Compared {
-    let n = sims.len() as f64;
-    let mean = (!sims.is_empty()).then(|| sims.iter().sum::<f64>() / n);
-    let scatter = (sims.len() >= 2).then(|| {
-        let mu = mean.unwrap_or(0.0);
-        (sims.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-    });
+    let (mean, scatter) = mean_sd(&sims);
+    let mean = (!sims.is_empty()).then_some(mean);
     let residual = mean.map(|s| s - m.value);
-    let var = scatter.map_or(0.0, |s| s * s / n) + m.uncertainty.map_or(0.0, |u| u * u);
+    let se = std_error(scatter, sims.len(), m.uncertainty);
     Compared {
         relative_error: residual.map(|r| r / m.value),
-        z_score: residual.filter(|_| var > 0.0).map(|r| r / var.sqrt()),
+        z_score: residual.zip(se).map(|(r, se)| r / se),
         measurement: m,
         simulated: sims,
         simulated_mean: mean,
@@ -305,8 +318,6 @@ fn summarize(m: Measurement, sims: Vec<f64>, problems: Vec<String>) -> Compared 
 /// A compared row as the analysis sees it.
 fn analysis_row(c: &Compared) -> compare_stats::Row {
     let m = &c.measurement;
-    let n = c.simulated.len().max(1) as f64;
-    let var = c.simulated_scatter.map_or(0.0, |s| s * s / n) + m.uncertainty.map_or(0.0, |u| u * u);
     compare_stats::Row {
         test: m.test.clone(),
         observable: m.observable.clone(),
@@ -314,7 +325,7 @@ fn analysis_row(c: &Compared) -> compare_stats::Row {
         conditions: m.conditions.clone(),
         measured: m.value,
         simulated: c.simulated_mean,
-        std_error: (var > 0.0).then(|| var.sqrt()),
+        std_error: std_error(c.simulated_scatter, c.simulated.len(), m.uncertainty),
     }
 }
 

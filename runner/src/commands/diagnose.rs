@@ -13,7 +13,7 @@
 //! `DIR/diagnosis.md`, the ranking in words.
 
 use super::calibrate::{Param, parse_param};
-use super::compare::{Simulate, simulate};
+use super::compare::{Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use crate::lab::model::Model;
 use crate::sweep::execute;
@@ -261,10 +261,6 @@ fn variant(
     Ok(path)
 }
 
-fn mean(v: &[f64]) -> Option<f64> {
-    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
-}
-
 pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     if args.replicates < 2 {
         bail!(
@@ -388,16 +384,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             &stop,
         )?;
         if k == 0 {
-            base_scatter = sims
-                .iter()
-                .map(|(v, _)| {
-                    let m = mean(v)?;
-                    (v.len() >= 2).then(|| {
-                        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64)
-                            .sqrt()
-                    })
-                })
-                .collect();
+            base_scatter = sims.iter().map(|(v, _)| mean_sd(v).1).collect();
         }
         // Only replicates that finished in every variant would be fairer; a failed run
         // is reported and its row dropped below.
@@ -405,7 +392,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             sims.iter()
                 .map(|(v, _)| {
                     if v.len() == args.replicates {
-                        mean(v)
+                        Some(mean_sd(v).0)
                     } else {
                         None
                     }
@@ -426,21 +413,20 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     let mut used = vec![];
     let mut dropped = vec![];
     for (i, m) in rows.iter().enumerate() {
-        let se2 = m.uncertainty.map_or(0.0, |u| u * u)
-            + base_scatter[i].map_or(0.0, |s| s * s / args.replicates as f64);
+        let se = std_error(base_scatter[i], args.replicates, m.uncertainty);
         if means.iter().any(|v| v[i].is_none()) {
             dropped.push(format!(
                 "row {}: a run failed ({})",
                 m.row,
                 problems.get(&i).map_or("no value", String::as_str)
             ));
-        } else if se2 <= 0.0 {
+        } else if se.is_none() {
             dropped.push(format!(
                 "row {}: no uncertainty and no replicate scatter",
                 m.row
             ));
         } else {
-            used.push((i, se2.sqrt()));
+            used.push((i, se.unwrap()));
         }
     }
     if used.is_empty() {
@@ -470,12 +456,8 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                     .zip(&values[1][i])
                     .map(|(a, b)| (a - b) / h / s)
                     .collect();
-                let n = d.len() as f64;
-                if d.len() < 2 {
-                    return 0.0;
-                }
-                let mu = d.iter().sum::<f64>() / n;
-                d.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (n - 1.0) / n
+                // Variance of the mean difference.
+                mean_sd(&d).1.map_or(0.0, |sd| sd * sd / d.len() as f64)
             })
             .collect()
     };
