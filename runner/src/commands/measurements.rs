@@ -64,8 +64,8 @@ pub fn conditions_of(test: &str) -> &'static [&'static str] {
     }
 }
 
-/// Reads and checks a measurement file.
-pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
+/// Opens a CSV file (cells trimmed) and reads its header.
+pub fn open_csv(path: &Path) -> Result<(csv::Reader<std::fs::File>, Vec<String>)> {
     let file = path.display();
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -78,6 +78,106 @@ pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
         .iter()
         .map(str::to_string)
         .collect();
+    Ok((reader, head))
+}
+
+/// The rows of an open CSV that are not blank, each with its row number (the header is 1).
+pub fn rows_of<'a>(
+    reader: &'a mut csv::Reader<std::fs::File>,
+    head: &'a [String],
+    file: &'a str,
+) -> impl Iterator<Item = Result<Cells<'a>>> + 'a {
+    reader.records().enumerate().filter_map(move |(k, record)| {
+        let row = k + 2;
+        match record {
+            Err(e) => Some(Err(anyhow!("{file}: row {row}: {e}"))),
+            Ok(r) if r.iter().all(str::is_empty) => None,
+            Ok(record) => Some(Ok(Cells {
+                file,
+                row,
+                head,
+                record,
+            })),
+        }
+    })
+}
+
+/// One row of a CSV file, for reading cells with errors that name the file, row and column.
+pub struct Cells<'a> {
+    file: &'a str,
+    pub row: usize,
+    head: &'a [String],
+    record: csv::StringRecord,
+}
+
+impl Cells<'_> {
+    pub fn has(&self, name: &str) -> bool {
+        self.head.iter().any(|h| h == name)
+    }
+
+    /// The cell under `name` ("" when the column is missing).
+    pub fn cell(&self, name: &str) -> &str {
+        self.head
+            .iter()
+            .position(|h| h == name)
+            .and_then(|c| self.record.get(c))
+            .unwrap_or("")
+    }
+
+    /// "FILE: row R, column NAME".
+    pub fn at(&self, name: &str) -> String {
+        format!("{}: row {}, column {name}", self.file, self.row)
+    }
+
+    /// A finite number, or `None` for an empty cell.
+    pub fn number(&self, name: &str) -> Result<Option<f64>> {
+        let s = self.cell(name);
+        if s.is_empty() {
+            return Ok(None);
+        }
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            _ => bail!("{}: `{s}` is not a finite number", self.at(name)),
+        }
+    }
+
+    /// The row's test, with the observable it measures and its unit.
+    pub fn test(&self) -> Result<(String, &'static str, &'static str)> {
+        let test = self.cell("test").to_string();
+        let (observable, unit) = observable_of(&test).ok_or_else(|| {
+            anyhow!(
+                "{}: test `{test}` is unknown; allowed: {}",
+                self.at("test"),
+                TESTS.map(|t| t.0).join(", ")
+            )
+        })?;
+        Ok((test, observable, unit))
+    }
+
+    /// The conditions `test` needs, each present and a number.
+    pub fn conditions(&self, test: &str) -> Result<BTreeMap<String, f64>> {
+        let mut conditions = BTreeMap::new();
+        for name in conditions_of(test) {
+            if !self.has(name) {
+                bail!(
+                    "{}: no column `{name}`, which a {test} row (row {}) needs",
+                    self.file,
+                    self.row
+                );
+            }
+            let v = self
+                .number(name)?
+                .ok_or_else(|| anyhow!("{}: empty, but a {test} test needs it", self.at(name)))?;
+            conditions.insert(name.to_string(), v);
+        }
+        Ok(conditions)
+    }
+}
+
+/// Reads and checks a measurement file.
+pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
+    let (mut reader, head) = open_csv(path)?;
+    let file = path.display().to_string();
     let missing: Vec<&str> = REQUIRED
         .iter()
         .copied()
@@ -104,79 +204,49 @@ pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
             allowed.join(", ")
         );
     }
-    let col = |name: &str| head.iter().position(|h| h == name);
     let mut out = vec![];
-    for (k, record) in reader.records().enumerate() {
-        let row = k + 2;
-        let record = record.with_context(|| format!("{file}: row {row}"))?;
-        if record.iter().all(str::is_empty) {
-            continue;
-        }
-        let cell = |name: &str| col(name).and_then(|c| record.get(c)).unwrap_or("");
-        let at = |name: &str| format!("{file}: row {row}, column {name}");
-        let number = |name: &str| -> Result<Option<f64>> {
-            let s = cell(name);
-            if s.is_empty() {
-                return Ok(None);
-            }
-            match s.parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(Some(v)),
-                _ => bail!("{}: `{s}` is not a finite number", at(name)),
-            }
-        };
-        let test = cell("test").to_string();
-        let (observable, unit) = observable_of(&test).ok_or_else(|| {
-            anyhow!(
-                "{}: test `{test}` is unknown; allowed: {}",
-                at("test"),
-                TESTS.map(|t| t.0).join(", ")
-            )
-        })?;
-        if cell("observable") != observable {
+    for cells in rows_of(&mut reader, &head, &file) {
+        let c = cells?;
+        let (test, observable, unit) = c.test()?;
+        if c.cell("observable") != observable {
             bail!(
                 "{}: a {test} test measures `{observable}`, not `{}`",
-                at("observable"),
-                cell("observable")
+                c.at("observable"),
+                c.cell("observable")
             );
         }
-        if cell("unit") != unit {
+        if c.cell("unit") != unit {
             bail!(
                 "{}: {observable} is in {unit}, not `{}`",
-                at("unit"),
-                cell("unit")
+                c.at("unit"),
+                c.cell("unit")
             );
         }
-        let value = number("value")?.ok_or_else(|| anyhow!("{}: empty", at("value")))?;
-        let mut conditions = BTreeMap::new();
-        for name in conditions_of(&test) {
-            if col(name).is_none() {
-                bail!("{file}: no column `{name}`, which a {test} row (row {row}) needs");
-            }
-            let v = number(name)?
-                .ok_or_else(|| anyhow!("{}: empty, but a {test} test needs it", at(name)))?;
-            conditions.insert(name.to_string(), v);
-        }
-        let uncertainty = number("uncertainty")?;
+        let value = c
+            .number("value")?
+            .ok_or_else(|| anyhow!("{}: empty", c.at("value")))?;
+        let conditions = c.conditions(&test)?;
+        let uncertainty = c.number("uncertainty")?;
         if let Some(u) = uncertainty {
             if u <= 0.0 {
                 bail!(
                     "{}: {u} is not a standard deviation: allowed > 0, or empty when unknown",
-                    at("uncertainty")
+                    c.at("uncertainty")
                 );
             }
         }
-        let replicates = match cell("replicates") {
+        let replicates = match c.cell("replicates") {
             "" => None,
             s => match s.parse::<u32>() {
                 Ok(n) if n >= 1 => Some(n),
                 _ => bail!(
                     "{}: `{s}` is not a count: allowed a whole number >= 1, or empty",
-                    at("replicates")
+                    c.at("replicates")
                 ),
             },
         };
         out.push(Measurement {
-            row,
+            row: c.row,
             test,
             conditions,
             observable: observable.to_string(),
@@ -184,7 +254,7 @@ pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
             unit: unit.to_string(),
             uncertainty,
             replicates,
-            source: cell("source").to_string(),
+            source: c.cell("source").to_string(),
         });
     }
     if out.is_empty() {

@@ -16,11 +16,11 @@
 
 use super::compare::{Simulate, simulate};
 use super::measurements::{
-    CONDITIONS, Measurement, check_against_model, conditions_of, observable_of, write_measurements,
+    CONDITIONS, Measurement, check_against_model, open_csv, rows_of, write_measurements,
 };
 use crate::lab::model::Model;
 use crate::sweep::execute;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -118,49 +118,22 @@ pub fn parse_noise(spec: &str) -> Result<BTreeMap<String, Noise>> {
 
 /// Reads the conditions file: rows of `test` and its conditions.
 pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
-    let file = path.display();
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("{file}: cannot read"))?;
-    let head: Vec<String> = reader.headers()?.iter().map(str::to_string).collect();
-    let col = |name: &str| head.iter().position(|h| h == name);
-    if col("test").is_none() {
+    let (mut reader, head) = open_csv(path)?;
+    let file = path.display().to_string();
+    if !head.iter().any(|h| h == "test") {
         bail!(
             "{file}: no column `test`; a conditions file needs test and the conditions it uses ({})",
             CONDITIONS.join(", ")
         );
     }
     let mut rows = vec![];
-    for (k, rec) in reader.records().enumerate() {
-        let row = k + 2;
-        let rec = rec.with_context(|| format!("{file}: row {row}"))?;
-        if rec.iter().all(str::is_empty) {
-            continue;
-        }
-        let cell = |name: &str| col(name).and_then(|c| rec.get(c)).unwrap_or("");
-        let test = cell("test").to_string();
-        let (observable, unit) = observable_of(&test).ok_or_else(|| {
-            anyhow!(
-                "{file}: row {row}, column test: `{test}` is unknown; allowed: {}",
-                super::measurements::TESTS.map(|t| t.0).join(", ")
-            )
-        })?;
-        let mut conditions = BTreeMap::new();
-        for name in conditions_of(&test) {
-            if col(name).is_none() {
-                bail!("{file}: no column `{name}`, which a {test} row (row {row}) needs");
-            }
-            let s = cell(name);
-            let v: f64 = s.parse().ok().filter(|v: &f64| v.is_finite()).ok_or_else(|| {
-                anyhow!("{file}: row {row}, column {name}: `{s}` is not a finite number (a {test} test needs it)")
-            })?;
-            conditions.insert(name.to_string(), v);
-        }
+    for cells in rows_of(&mut reader, &head, &file) {
+        let c = cells?;
+        let (test, observable, unit) = c.test()?;
         rows.push(Measurement {
-            row,
+            row: c.row,
+            conditions: c.conditions(&test)?,
             test,
-            conditions,
             observable: observable.to_string(),
             value: f64::NAN,
             unit: unit.to_string(),
