@@ -461,7 +461,9 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             })
             .collect()
     };
-    let x = DMatrix::from_fn(m, params.len(), |r, c| sens(2 + c)[r]);
+    // Column by column (each sensitivity once, not once per element).
+    let columns: Vec<f64> = (0..params.len()).flat_map(|c| sens(2 + c)).collect();
+    let x = DMatrix::from_column_slice(m, params.len(), &columns);
     let candidates: Vec<Candidate> = names
         .iter()
         .enumerate()
@@ -487,8 +489,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             .collect()
     };
     let before = rmse_by_obs(&absorbed);
-    let raw: Vec<f64> = residual.clone();
-    let now = rmse_by_obs(&raw);
+    let now = rmse_by_obs(&residual);
     let diagnosed: Vec<Diagnosed> = scores
         .into_iter()
         .map(|s| {
