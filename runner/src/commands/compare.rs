@@ -12,7 +12,7 @@ use super::measurements::check_against_model;
 pub use super::measurements::{Measurement, read_measurements};
 use crate::lab::model::Model;
 use crate::sweep::execute::{self, Options};
-use crate::sweep::job::{Status, read_summary, run_dir};
+use crate::sweep::job::{RunSummary, Status, read_summary, run_dir};
 use crate::sweep::plan::{Factor, Plan, PlannedRun};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
@@ -161,11 +161,21 @@ pub fn simulate(
             tests.push(&m.test);
         }
     }
+    // Rows of one test at the same conditions (a repose run's angle, tray mass and flow
+    // rate) share their runs: `group[i]` is row i's set of runs, numbered per test.
+    let mut group = vec![0usize; rows.len()];
     let mut plans = vec![];
     for test in &tests {
         let factors = condition_factors(test);
         let mut runs = vec![];
-        for m in rows.iter().filter(|m| m.test == *test) {
+        let mut seen: Vec<&BTreeMap<String, f64>> = vec![];
+        for (i, m) in rows.iter().enumerate().filter(|(_, m)| m.test == *test) {
+            if let Some(g) = seen.iter().position(|c| **c == m.conditions) {
+                group[i] = g + 1;
+                continue;
+            }
+            seen.push(&m.conditions);
+            group[i] = seen.len();
             for r in 0..how.replicates {
                 let mut values = BTreeMap::new();
                 for f in &factors {
@@ -181,7 +191,7 @@ pub fn simulate(
                 }
                 runs.push(PlannedRun {
                     id: runs.len() + 1,
-                    std: m.row,
+                    std: seen.len(),
                     replicate: r + 1,
                     coded: BTreeMap::new(),
                     values,
@@ -198,13 +208,11 @@ pub fn simulate(
     for (test, plan) in &plans {
         let dir = how.out.join(test);
         run_generated(plan, &dir, how.cores, how.quiet, stop)?;
-        for m in rows.iter().filter(|m| &m.test == test) {
+        for (i, m) in rows.iter().enumerate().filter(|(_, m)| &m.test == test) {
             let (sims, problems) = by_row.entry(m.row).or_default();
-            for run in plan.runs.iter().filter(|r| r.std == m.row) {
+            for run in plan.runs.iter().filter(|r| r.std == group[i]) {
                 let s = read_summary(&run_dir(&dir, run.id));
-                let v = s
-                    .as_ref()
-                    .and_then(|s| s.reduced.as_ref()?.get(&m.observable)?.as_f64());
+                let v = s.as_ref().and_then(|s| observed(s, &m.observable));
                 match (v, s) {
                     (Some(v), Some(s)) if s.status == Status::Done => sims.push(v),
                     (_, Some(s)) => problems.push(format!(
@@ -225,6 +233,16 @@ pub fn simulate(
         .iter()
         .map(|m| by_row.remove(&m.row).unwrap_or_default())
         .collect())
+}
+
+/// A run's value of `observable`: reduced from its MCAP file by the study's method
+/// (`repose_angle_deg`, `peak_shear_force_n`, `ucs_kpa`), else measured by the experiment as
+/// it ran (the fixed-base heap angle, the tray's mass, the funnel's flow rate).
+pub fn observed(s: &RunSummary, observable: &str) -> Option<f64> {
+    let reduced = s.reduced.as_ref().and_then(|r| r.get(observable));
+    reduced
+        .or_else(|| s.experiment.as_ref()?.get(observable))?
+        .as_f64()
 }
 
 /// Runs (or resumes) a generated plan into `dir`, pinned, with a progress bar unless `quiet`.

@@ -17,12 +17,39 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// The tests tilth simulates, the observable each measures and its unit.
-pub const TESTS: [(&str, &str, &str); 3] = [
+/// The tests tilth simulates, each with the observables it measures and their units; the
+/// first is the test's own (the one the study reports).
+///
+/// A repose run also gives the funnel test's other readings: the angle of the heap on the
+/// fixed base (atan(H / R), H the heap's height over the tray of radius R: the fixed-base
+/// cone method, USP <1174>), the mass the tray holds, and the funnel's mass flow rate
+/// (`lab::discharge`: the Hall-flowmeter reading). They respond to different physics: the
+/// flow rate to wall friction and cohesion much more than to rolling resistance.
+pub const OBSERVABLES: [(&str, &str, &str); 6] = [
     ("repose", "repose_angle_deg", "deg"),
+    ("repose", "heap_cone_angle_deg", "deg"),
+    ("repose", "tray_mass_g", "g"),
+    ("repose", "funnel_flow_rate_g_s", "g/s"),
     ("direct_shear", "peak_shear_force_n", "N"),
     ("ucs", "ucs_kpa", "kPa"),
 ];
+
+/// The tests, in order.
+pub const TESTS: [&str; 3] = ["repose", "direct_shear", "ucs"];
+
+/// The observables a test measures, with their units; the first is the test's own.
+pub fn observables_of(test: &str) -> Vec<(&'static str, &'static str)> {
+    OBSERVABLES
+        .iter()
+        .filter(|(t, _, _)| *t == test)
+        .map(|(_, o, u)| (*o, *u))
+        .collect()
+}
+
+/// The test's own observable and its unit, or None for an unknown test.
+pub fn observable_of(test: &str) -> Option<(&'static str, &'static str)> {
+    observables_of(test).first().copied()
+}
 
 /// Condition columns, in file order.
 pub const CONDITIONS: [&str; 3] = ["moisture_pct", "firmness_mpa", "normal_pressure_pa"];
@@ -45,14 +72,6 @@ pub struct Measurement {
     /// Tests the value averages, when known.
     pub replicates: Option<u32>,
     pub source: String,
-}
-
-/// The observable a test measures, or an error listing the tests.
-pub fn observable_of(test: &str) -> Option<(&'static str, &'static str)> {
-    TESTS
-        .iter()
-        .find(|(t, _, _)| *t == test)
-        .map(|(_, o, u)| (*o, *u))
 }
 
 /// The conditions a test needs.
@@ -141,17 +160,36 @@ impl Cells<'_> {
         }
     }
 
-    /// The row's test, with the observable it measures and its unit.
+    /// The row's test, with its own observable and that observable's unit.
     pub fn test(&self) -> Result<(String, &'static str, &'static str)> {
         let test = self.cell("test").to_string();
         let (observable, unit) = observable_of(&test).ok_or_else(|| {
             anyhow!(
                 "{}: test `{test}` is unknown; allowed: {}",
                 self.at("test"),
-                TESTS.map(|t| t.0).join(", ")
+                TESTS.join(", ")
             )
         })?;
         Ok((test, observable, unit))
+    }
+
+    /// The row's observable, one that `test` measures, and its unit.
+    pub fn observable(&self, test: &str) -> Result<(&'static str, &'static str)> {
+        let name = self.cell("observable");
+        let all = observables_of(test);
+        all.iter()
+            .find(|(o, _)| *o == name)
+            .copied()
+            .ok_or_else(|| {
+                anyhow!(
+                    "{}: a {test} test measures {}, not `{name}`",
+                    self.at("observable"),
+                    all.iter()
+                        .map(|(o, _)| format!("`{o}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
     }
 
     /// The conditions `test` needs, each present and a number.
@@ -207,14 +245,8 @@ pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
     let mut out = vec![];
     for cells in rows_of(&mut reader, &head, &file) {
         let c = cells?;
-        let (test, observable, unit) = c.test()?;
-        if c.cell("observable") != observable {
-            bail!(
-                "{}: a {test} test measures `{observable}`, not `{}`",
-                c.at("observable"),
-                c.cell("observable")
-            );
-        }
+        let (test, _, _) = c.test()?;
+        let (observable, unit) = c.observable(&test)?;
         if c.cell("unit") != unit {
             bail!(
                 "{}: {observable} is in {unit}, not `{}`",

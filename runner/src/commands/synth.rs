@@ -10,11 +10,14 @@
 //!
 //! SPEC gives one standard deviation per observable: `repose_angle_deg=0.5` (absolute, in
 //! the observable's unit) or `peak_shear_force_n=4%` (relative to the simulated value);
-//! `0` adds no noise. The DEM runs use seeds derived from S, and the noise its own stream,
+//! `0` adds no noise. With `--replicates N` each value is the mean of N truth runs (a lab
+//! reports the mean of repeated tests) and `uncertainty` is sqrt(SD^2 + s^2 / N), s the runs'
+//! scatter. Several observables of one test at the same conditions (a conditions file with
+//! an `observable` column) share their runs. The DEM runs use seeds derived from S, and the noise its own stream,
 //! so the same S gives the same file. The runs are kept next to the output
 //! (`D.runs/<test>/`, resumable) unless `--work` says where.
 
-use super::compare::{Simulate, simulate};
+use super::compare::{Simulate, mean_sd, simulate};
 use super::measurements::{
     CONDITIONS, Measurement, check_against_model, open_csv, rows_of, write_measurements,
 };
@@ -34,14 +37,19 @@ pub struct SynthArgs {
     /// The truth: a model file with every effect the data should carry.
     #[arg(long)]
     pub truth: PathBuf,
-    /// Conditions to "measure" (CSV: test, moisture_pct, firmness_mpa, normal_pressure_pa;
-    /// other columns, e.g. a measurement file's value, are ignored).
+    /// Conditions to "measure" (CSV: test, moisture_pct, firmness_mpa, normal_pressure_pa,
+    /// and optionally observable, else the test's own; other columns, e.g. a measurement
+    /// file's value, are ignored).
     #[arg(long)]
     pub conditions: PathBuf,
     /// Noise per observable: NAME=SD or NAME=PCT% (comma-separated), e.g.
     /// repose_angle_deg=0.5,peak_shear_force_n=4%,ucs_kpa=5%.
     #[arg(long)]
     pub noise: String,
+    /// Tests averaged per measurement, as a lab reports the mean of repeated tests: the value
+    /// is the mean of this many truth runs (different seeds) plus the noise.
+    #[arg(long, default_value_t = 1)]
+    pub replicates: usize,
     /// Seed of the simulations and of the noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -87,10 +95,11 @@ pub fn parse_noise(spec: &str) -> Result<BTreeMap<String, Noise>> {
             .split_once('=')
             .ok_or_else(|| anyhow!("--noise `{part}`: expected NAME=SD or NAME=PCT%"))?;
         let (name, v) = (name.trim(), v.trim());
-        if !super::measurements::TESTS.iter().any(|t| t.1 == name) {
+        let all = super::measurements::OBSERVABLES;
+        if !all.iter().any(|t| t.1 == name) {
             bail!(
                 "--noise `{part}`: unknown observable `{name}`; allowed: {}",
-                super::measurements::TESTS.map(|t| t.1).join(", ")
+                all.map(|t| t.1).join(", ")
             );
         }
         let (num, relative) = match v.strip_suffix('%') {
@@ -129,7 +138,10 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
     let mut rows = vec![];
     for cells in rows_of(&mut reader, &head, &file) {
         let c = cells?;
-        let (test, observable, unit) = c.test()?;
+        let (test, mut observable, mut unit) = c.test()?;
+        if c.has("observable") && !c.cell("observable").is_empty() {
+            (observable, unit) = c.observable(&test)?;
+        }
         rows.push(Measurement {
             row: c.row,
             conditions: c.conditions(&test)?,
@@ -154,6 +166,12 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
     let mut rows = read_conditions(&args.conditions)?;
     check_against_model(&rows, &model, &args.conditions)?;
     let noise = parse_noise(&args.noise)?;
+    if !(1..=100).contains(&args.replicates) {
+        bail!(
+            "--replicates {}: allowed 1 to 100 truth runs per measurement",
+            args.replicates
+        );
+    }
     for m in &rows {
         if !noise.contains_key(&m.observable) {
             bail!(
@@ -183,7 +201,7 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
             model: &truth,
             data: &args.conditions,
             out: &work,
-            replicates: 1,
+            replicates: args.replicates,
             first_seed,
             coarse: args.coarse,
             cores: args.cores,
@@ -200,16 +218,19 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
         if args.coarse { ", coarse" } else { "" }
     );
     for (m, (values, problems)) in rows.iter_mut().zip(sims) {
-        let Some(&v) = values.first() else {
+        if values.len() < args.replicates {
             bail!(
-                "{}: row {}: the truth's {} run gave no {}: {}",
+                "{}: row {}: {} of the truth's {} {} runs gave no {}: {}",
                 args.conditions.display(),
                 m.row,
+                args.replicates - values.len(),
+                args.replicates,
                 m.test,
                 m.observable,
                 problems.join("; ")
             );
-        };
+        }
+        let (v, scatter) = mean_sd(&values);
         let sd = noise[&m.observable].sd(v);
         let e = if sd > 0.0 {
             Normal::new(0.0, sd)?.sample(&mut rng)
@@ -217,7 +238,12 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
             0.0
         };
         m.value = v + e;
-        m.uncertainty = (sd > 0.0).then_some(sd);
+        // What the value is uncertain by: the noise and the standard error of the mean of
+        // the truth's runs (their scatter is part of what a lab's repeated tests show).
+        let se = scatter.map_or(0.0, |s| s / (values.len() as f64).sqrt());
+        let u = sd.hypot(se);
+        m.uncertainty = (u > 0.0).then_some(u);
+        m.replicates = Some(args.replicates as u32);
         m.source = source.replace(',', ";");
     }
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -3,6 +3,7 @@
 //! [`model`] maps test conditions to contact parameters; [`experiment`] reads an experiment
 //! file and builds its scene and [`protocol`]; [`repose`], [`shear`] and [`ucs`] are the tests.
 
+pub mod discharge;
 pub mod experiment;
 pub mod model;
 pub mod protocol;

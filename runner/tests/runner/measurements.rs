@@ -257,3 +257,100 @@ fn report_puts_a_projects_compare_runs_side_by_side() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("no compare run below it"));
 }
+
+/// A repose run gives several readings: rows of one test at the same conditions share their
+/// runs, and with `--replicates N` each value is the mean of N truth runs, its uncertainty
+/// sqrt(noise^2 + s^2 / N) with s their scatter (read back from the runs' summaries here).
+#[test]
+fn synth_shares_runs_between_observables_and_averages_replicates() {
+    let dir = scratch("synth-observables");
+    let cond = dir.join("conditions.csv");
+    std::fs::write(
+        &cond,
+        "test,moisture_pct,observable\nrepose,6,heap_cone_angle_deg\nrepose,6,funnel_flow_rate_g_s\nrepose,6,tray_mass_g\n",
+    )
+    .unwrap();
+    let out = dir.join("data.csv");
+    let o = tilth(&[
+        "synth",
+        "--truth",
+        "models/li2022.toml",
+        "--conditions",
+        cond.to_str().unwrap(),
+        "--noise",
+        "heap_cone_angle_deg=0,funnel_flow_rate_g_s=0,tray_mass_g=0.5",
+        "--replicates",
+        "2",
+        "--seed",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+        "--work",
+        dir.join("runs").to_str().unwrap(),
+        "--coarse",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let runs: Vec<serde_json::Value> = (1..=3)
+        .filter_map(|k| {
+            std::fs::read(dir.join(format!("runs/repose/runs/{k:03}/summary.json"))).ok()
+        })
+        .map(|b| serde_json::from_slice(&b).unwrap())
+        .collect();
+    assert_eq!(
+        runs.len(),
+        2,
+        "three observables at one condition: 2 runs, not 6"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 3);
+    for row in &rows {
+        let key = row[4];
+        let v: Vec<f64> = runs
+            .iter()
+            .map(|r| r["experiment"][key].as_f64().unwrap())
+            .collect();
+        let mean = 0.5 * (v[0] + v[1]);
+        // Two values: s = |a - b| / sqrt(2), s / sqrt(2) = |a - b| / 2.
+        let se = 0.5 * (v[0] - v[1]).abs();
+        let value: f64 = row[5].parse().unwrap();
+        let u: f64 = row[7].parse().unwrap();
+        assert_eq!(row[8], "2", "{key}: replicates");
+        if key == "tray_mass_g" {
+            assert!((u - 0.5f64.hypot(se)).abs() < 1e-9 * u, "{key}: {u}");
+            assert!((value - mean).abs() < 5.0 * 0.5, "{key}: noise beyond 5 SD");
+        } else {
+            assert!(
+                (value - mean).abs() <= 1e-9 * mean.abs(),
+                "{key}: {value} vs {mean}"
+            );
+            assert!((u - se).abs() <= 1e-9 * se, "{key}: {u} vs {se}");
+        }
+    }
+    // A reading the test does not give is refused, naming the ones it does.
+    std::fs::write(&cond, "test,moisture_pct,observable\nrepose,6,ucs_kpa\n").unwrap();
+    let o = tilth(&[
+        "synth",
+        "--truth",
+        "models/li2022.toml",
+        "--conditions",
+        cond.to_str().unwrap(),
+        "--noise",
+        "ucs_kpa=1",
+        "--out",
+        out.to_str().unwrap(),
+        "--coarse",
+        "--quiet",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("row 2, column observable") && err.contains("`funnel_flow_rate_g_s`"),
+        "{err}"
+    );
+}
