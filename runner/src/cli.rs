@@ -1,7 +1,7 @@
 //! The command-line surface.
 
 use crate::commands::{
-    bench, calibrate, compare, diagnose, laws, project_report, reduce, rsm, run, sweep, synth,
+    bench, calibrate, compare, diagnose, fit, laws, project_report, reduce, rsm, run, sweep, synth,
 };
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -42,6 +42,9 @@ pub enum Command {
     /// Fit free model parameters to one test's measurements: surface runs, solve, refine
     /// with direct runs, uncertainty; writes a calibrated model file.
     Calibrate(calibrate::CalibrateArgs),
+    /// Fit free parameters (and candidate strengths) to every measured row at once:
+    /// Levenberg-Marquardt on simulations; writes the fitted model file.
+    Fit(fit::FitArgs),
     /// Response surfaces on tables of runs: fit with ANOVA, solve for targets, steepest ascent.
     Rsm {
         #[command(subcommand)]
@@ -68,5 +71,6 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Synth(args) => synth::synth(&args, out),
         Command::Report(args) => project_report::report(&args, out),
         Command::Diagnose(args) => diagnose::diagnose(&args, out),
+        Command::Fit(args) => fit::fit(&args, out),
     }
 }

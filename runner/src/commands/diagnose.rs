@@ -15,15 +15,16 @@
 use super::calibrate::{Param, parse_param};
 use super::compare::{Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
+use super::model_edit::{add_to, switch_on, variant};
 use crate::lab::model::Model;
 use crate::sweep::execute;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use nalgebra::DMatrix;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use tilth_tools::diagnose::{Candidate, Score, Unidentified, score_tests};
 
 #[derive(Debug, Args)]
@@ -70,195 +71,6 @@ pub struct Diagnosed {
     /// estimated strength and recalibrating the free parameters.
     pub predicted_rmse_drop: BTreeMap<String, f64>,
     pub description: Option<String>,
-}
-
-/// Adds `delta` to `pairs.PAIR.KEY` of a model document: a number, each `y` of an
-/// `interpolate` table, or the constant of a `polynomial`; a missing key becomes `delta`.
-fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Result<()> {
-    let (pair, key) = path
-        .split_once('.')
-        .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
-    let table = doc["pairs"][pair]
-        .as_table_like_mut()
-        .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
-    let Some(item) = table.get_mut(key) else {
-        table.insert(key, toml_edit::value(delta));
-        return Ok(());
-    };
-    let v = item
-        .as_value_mut()
-        .ok_or_else(|| anyhow!("pairs.{pair}.{key} is not a value"))?;
-    let num = |v: &toml_edit::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
-    if let Some(x) = num(v) {
-        *v = (x + delta).into();
-        return Ok(());
-    }
-    if let Some(t) = v.as_inline_table_mut() {
-        let (list, all) = if t.contains_key("interpolate") {
-            ("y", true)
-        } else if t.contains_key("polynomial") {
-            ("coefficients", false)
-        } else {
-            bail!(
-                "pairs.{pair}.{key}: only a number, an interpolate or a polynomial table can be varied"
-            );
-        };
-        let arr = t
-            .get_mut(list)
-            .and_then(|a| a.as_array_mut())
-            .ok_or_else(|| anyhow!("pairs.{pair}.{key}: no `{list}` array"))?;
-        for k in 0..arr.len() {
-            if k > 0 && !all {
-                break;
-            }
-            let x = num(arr.get(k).unwrap())
-                .ok_or_else(|| anyhow!("pairs.{pair}.{key}.{list}[{k}] is not a number"))?;
-            arr.replace(k, x + delta);
-        }
-        return Ok(());
-    }
-    bail!("pairs.{pair}.{key} cannot be varied")
-}
-
-/// Adds `slope * (c - mid)` to `pairs.PAIR.KEY` along condition `c` (mid the middle of its
-/// range [lo, hi]): a number becomes an `interpolate` table over [lo, hi]; an `interpolate`
-/// table over `c` gets the slope added at each of its points.
-fn add_slope(
-    doc: &mut toml_edit::DocumentMut,
-    path: &str,
-    cond: &str,
-    lo: f64,
-    hi: f64,
-    slope: f64,
-) -> Result<()> {
-    let (pair, key) = path
-        .split_once('.')
-        .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
-    let mid = 0.5 * (lo + hi);
-    let table = doc["pairs"][pair]
-        .as_table_like_mut()
-        .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
-    let num = |v: &toml_edit::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
-    let current = table.get(key).and_then(|i| i.as_value().cloned());
-    let base = match &current {
-        None => Some(0.0),
-        Some(v) => num(v),
-    };
-    if let Some(b) = base {
-        let mut t = toml_edit::InlineTable::new();
-        t.insert("interpolate", cond.into());
-        t.insert("x", toml_edit::Value::Array([lo, hi].into_iter().collect()));
-        t.insert(
-            "y",
-            toml_edit::Value::Array(
-                [b + slope * (lo - mid), b + slope * (hi - mid)]
-                    .into_iter()
-                    .collect(),
-            ),
-        );
-        table.insert(key, toml_edit::value(t));
-        return Ok(());
-    }
-    let mut v = current.unwrap();
-    let t = v
-        .as_inline_table_mut()
-        .filter(|t| t.get("interpolate").and_then(|c| c.as_str()) == Some(cond))
-        .ok_or_else(|| {
-            anyhow!("pairs.{pair}.{key}: only a number or an interpolate table over {cond} can take a slope along {cond}")
-        })?;
-    let xs: Vec<f64> = t
-        .get("x")
-        .and_then(|a| a.as_array())
-        .map(|a| a.iter().filter_map(num).collect())
-        .unwrap_or_default();
-    let ys = t
-        .get_mut("y")
-        .and_then(|a| a.as_array_mut())
-        .ok_or_else(|| anyhow!("pairs.{pair}.{key}: no `y` array"))?;
-    if xs.len() != ys.len() {
-        bail!("pairs.{pair}.{key}: x and y differ in length");
-    }
-    for (k, x) in xs.iter().enumerate() {
-        let y = num(ys.get(k).unwrap())
-            .ok_or_else(|| anyhow!("pairs.{pair}.{key}.y[{k}] is not a number"))?;
-        ys.replace(k, y + slope * (x - mid));
-    }
-    table.insert(key, toml_edit::value(v));
-    Ok(())
-}
-
-/// The model with candidate `name` switched on at `strength`.
-fn switch_on(
-    doc: &mut toml_edit::DocumentMut,
-    model: &Model,
-    name: &str,
-    strength: f64,
-) -> Result<()> {
-    let c = &model.file.candidates[name];
-    if let Some(law) = &c.extra {
-        let contact = doc["contact"]
-            .as_table_like_mut()
-            .ok_or_else(|| anyhow!("the model has no [contact]"))?;
-        if contact.get("extra").is_none() {
-            contact.insert("extra", toml_edit::value(toml_edit::Array::new()));
-        }
-        let arr = contact
-            .get_mut("extra")
-            .and_then(|e| e.as_array_mut())
-            .ok_or_else(|| anyhow!("contact.extra is not a list"))?;
-        if !arr.iter().any(|v| v.as_str() == Some(law)) {
-            arr.push(law.as_str());
-        }
-    }
-    for (pair, values) in &c.pairs {
-        let table = doc["pairs"][pair.as_str()]
-            .as_table_like_mut()
-            .ok_or_else(|| {
-                anyhow!("candidates.{name}.pairs.{pair}: the model has no [pairs.{pair}]")
-            })?;
-        for (k, v) in values {
-            let parsed: toml_edit::Value = v
-                .to_string()
-                .parse()
-                .with_context(|| format!("candidates.{name}.pairs.{pair}.{k}"))?;
-            table.insert(k, toml_edit::value(parsed));
-        }
-    }
-    for path in &c.strength {
-        match &c.along {
-            None => add_to(doc, path, strength),
-            Some(cond) => {
-                let [lo, hi] = *model.file.conditions.get(cond).ok_or_else(|| {
-                    anyhow!(
-                        "candidates.{name}.along = \"{cond}\": the model has no such condition; it has {}",
-                        model.file.conditions.keys().cloned().collect::<Vec<_>>().join(", ")
-                    )
-                })?;
-                add_slope(doc, path, cond, lo, hi, strength)
-            }
-        }
-        .with_context(|| format!("candidates.{name}.strength"))?;
-    }
-    Ok(())
-}
-
-/// Writes a variant of the model file and returns its path.
-fn variant(
-    model: &Model,
-    text: &str,
-    dir: &Path,
-    name: &str,
-    edit: impl FnOnce(&mut toml_edit::DocumentMut) -> Result<()>,
-) -> Result<PathBuf> {
-    let mut doc: toml_edit::DocumentMut = text
-        .parse()
-        .with_context(|| format!("{}: not TOML", model.path.display()))?;
-    edit(&mut doc).with_context(|| format!("{}: variant {name}", model.path.display()))?;
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, doc.to_string())?;
-    // Refuse a variant the lab would refuse, before any run.
-    Model::load(&path).with_context(|| format!("variant {name}"))?;
-    Ok(path)
 }
 
 pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {

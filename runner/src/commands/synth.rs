@@ -46,6 +46,11 @@ pub struct SynthArgs {
     /// repose_angle_deg=0.5,peak_shear_force_n=4%,ucs_kpa=5%.
     #[arg(long)]
     pub noise: String,
+    /// Hide an effect in the truth: switch the truth model's `[candidates.NAME]` on at this
+    /// strength, NAME=STRENGTH (repeatable). The truth used is written next to --out
+    /// (`<name>.truth.toml`).
+    #[arg(long = "with")]
+    pub with: Vec<String>,
     /// Tests averaged per measurement, as a lab reports the mean of repeated tests: the value
     /// is the mean of this many truth runs (different seeds) plus the noise.
     #[arg(long, default_value_t = 1)]
@@ -125,6 +130,55 @@ pub fn parse_noise(spec: &str) -> Result<BTreeMap<String, Noise>> {
     Ok(out)
 }
 
+/// Writes the truth with the `--with` candidates switched on, next to `out`; returns its path.
+fn hide_effects(model: &Model, with: &[String], out: &Path) -> Result<PathBuf> {
+    let text = std::fs::read_to_string(&model.path)?;
+    let mut on = vec![];
+    for w in with {
+        let (name, v) = w
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--with `{w}`: expected NAME=STRENGTH"))?;
+        let name = name.trim();
+        if !model.file.candidates.contains_key(name) {
+            bail!(
+                "--with `{w}`: {} has no [candidates.{name}]; it has {}",
+                model.path.display(),
+                model
+                    .file
+                    .candidates
+                    .keys()
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        let s: f64 = v
+            .trim()
+            .parse()
+            .ok()
+            .filter(|x: &f64| x.is_finite())
+            .ok_or_else(|| anyhow!("--with `{w}`: `{v}` is not a number"))?;
+        on.push((name.to_string(), s));
+    }
+    let dir = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)?;
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "synth".into());
+    let name = format!("{stem}.truth");
+    let path = super::model_edit::variant(model, &text, dir, &name, |d| {
+        for (n, s) in &on {
+            super::model_edit::switch_on(d, model, n, *s)?;
+        }
+        Ok(())
+    })?;
+    Ok(std::path::absolute(path)?)
+}
+
 /// Reads the conditions file: rows of `test` and its conditions.
 pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
     let (mut reader, head) = open_csv(path)?;
@@ -161,8 +215,12 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
 }
 
 pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
-    let truth = std::path::absolute(&args.truth)?;
-    let model = Model::load(&truth)?;
+    let mut truth = std::path::absolute(&args.truth)?;
+    let mut model = Model::load(&truth)?;
+    if !args.with.is_empty() {
+        truth = hide_effects(&model, &args.with, &args.out)?;
+        model = Model::load(&truth)?;
+    }
     let mut rows = read_conditions(&args.conditions)?;
     check_against_model(&rows, &model, &args.conditions)?;
     let noise = parse_noise(&args.noise)?;
@@ -211,8 +269,13 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
     )?;
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     let source = format!(
-        "synth: truth {}, seed {}, noise {}{}",
+        "synth: truth {}{}, seed {}, noise {}{}",
         args.truth.display(),
+        if args.with.is_empty() {
+            String::new()
+        } else {
+            format!(" with {}", args.with.join(" and "))
+        },
         args.seed,
         args.noise,
         if args.coarse { ", coarse" } else { "" }

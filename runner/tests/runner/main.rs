@@ -6,6 +6,7 @@ mod diagnose;
 mod end_to_end;
 mod experiments;
 mod external;
+mod fit;
 mod measurements;
 mod rsm;
 mod sweeps;

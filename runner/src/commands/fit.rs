@@ -1,0 +1,501 @@
+//! `tilth fit --model M.toml --data D.csv --param ... --out DIR`: one set of parameters for
+//! every measured row at once (all tests, conditions and observables), by weighted least
+//! squares on simulations; a candidate effect's strength can be one of them.
+//!
+//! Where `tilth calibrate` fits each condition on its own (a parameter becomes a table over
+//! the condition), `fit` moves each parameter by one amount everywhere, so that the
+//! measurements together decide it: what "add the effect and recalibrate" needs after
+//! `tilth diagnose`, and the joint calibration EDEM users do by hand.
+//!
+//! Parameters: `PAIR.KEY=LOW:HIGH` shifts the model's value (a number or every point of its
+//! table) by one offset, keeping every point within [LOW, HIGH]; `candidate.NAME=LOW:HIGH`
+//! is the strength of the model file's `[candidates.NAME]`, switched on (start 0, or
+//! `LOW:HIGH@START`, e.g. diagnose's estimate).
+//!
+//! Levenberg-Marquardt with finite-difference Jacobians. Each iteration runs the current
+//! setting and each parameter moved by 5 % of its range, all with seeds 1..R (common random
+//! numbers: the differences carry less of the runs' scatter). Residuals are standardised by
+//! each row's standard error sqrt(uncertainty^2 + s^2 / R), s the current setting's scatter:
+//! chi^2 = sum z^2. The step solves (J'J + lambda diag J'J) d = J'z, limited to a quarter of
+//! each range; a step that raises chi^2 is taken back and lambda raised (Marquardt 1963).
+//! Standard errors from (J'J)^-1, scaled by chi^2 / dof when that is above 1.
+//!
+//! Writes `DIR/fit.json` (estimate, standard errors, correlations, the history),
+//! `DIR/fit.md`, and `DIR/model.toml`: the model with the fitted parameters, ready for
+//! `tilth compare`. Runs go to `DIR/runs/iter-K/<variant>/` and resume.
+
+use super::compare::{Simulate, mean_sd, simulate, std_error};
+use super::measurements::{Measurement, check_against_model, read_measurements};
+use super::model_edit::{add_to, switch_on, values_of, variant};
+use crate::lab::model::Model;
+use crate::sweep::execute;
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Starting model file.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Measurements (CSV): every row is fitted.
+    #[arg(long)]
+    pub data: PathBuf,
+    /// A free parameter: `PAIR.KEY=LOW:HIGH` or `candidate.NAME=LOW:HIGH[@START]`
+    /// (repeatable).
+    #[arg(long = "param", required = true)]
+    pub params: Vec<String>,
+    /// Runs per row and setting (seeds 1..R, the same at every setting).
+    #[arg(long, default_value_t = 3)]
+    pub replicates: usize,
+    /// Levenberg-Marquardt iterations, at most (each runs 1 + parameters settings).
+    #[arg(long, default_value_t = 4)]
+    pub iterations: usize,
+    #[arg(long)]
+    pub out: PathBuf,
+    #[arg(long)]
+    pub coarse: bool,
+    #[arg(long)]
+    pub cores: Option<usize>,
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// What a free parameter moves.
+#[derive(Debug, Clone, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Target {
+    /// An offset added to `pairs.PAIR.KEY`.
+    Offset { path: String },
+    /// The strength of `[candidates.NAME]`.
+    Candidate { name: String },
+}
+
+/// A free parameter: its value is the offset or the strength.
+#[derive(Debug, Clone, Serialize)]
+pub struct FreeParam {
+    pub label: String,
+    pub target: Target,
+    /// Bounds of the value (for an offset: what keeps the model's points in range).
+    pub low: f64,
+    pub high: f64,
+    pub start: f64,
+}
+
+fn parse(s: &str, model: &Model, doc: &toml_edit::DocumentMut) -> Result<FreeParam> {
+    let bad = || {
+        anyhow!(
+            "--param {s:?}: expected PAIR.KEY=LOW:HIGH or candidate.NAME=LOW:HIGH[@START], e.g. soil-soil.rolling_friction=0.05:0.45"
+        )
+    };
+    let (path, range) = s.split_once('=').ok_or_else(bad)?;
+    let (range, start) = match range.split_once('@') {
+        Some((r, x)) => (r, Some(x)),
+        None => (range, None),
+    };
+    let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| anyhow!("--param {s:?}: {t:?} is not a number"))
+    };
+    let (low, high) = (num(lo)?, num(hi)?);
+    if high <= low {
+        bail!("--param {s:?}: the range must be LOW:HIGH with LOW < HIGH");
+    }
+    let path = path.trim();
+    if let Some(name) = path.strip_prefix("candidate.") {
+        if !model.file.candidates.contains_key(name) {
+            bail!(
+                "--param {s:?}: {} has no [candidates.{name}]; it has {}",
+                model.path.display(),
+                model
+                    .file
+                    .candidates
+                    .keys()
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        let start = start.map(num).transpose()?.unwrap_or(0.0);
+        if !(low..=high).contains(&start) {
+            bail!("--param {s:?}: the start {start} is outside [{low}, {high}]");
+        }
+        return Ok(FreeParam {
+            label: path.to_string(),
+            target: Target::Candidate {
+                name: name.to_string(),
+            },
+            low,
+            high,
+            start,
+        });
+    }
+    if start.is_some() {
+        bail!("--param {s:?}: @START is for candidates; a PAIR.KEY starts at the model's value");
+    }
+    if !path.contains('.') {
+        return Err(bad());
+    }
+    let now = values_of(doc, path).with_context(|| format!("--param {s:?}"))?;
+    let (min, max) = now
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if min < low || max > high {
+        bail!("--param {s:?}: the model's value ({min} to {max}) is outside [{low}, {high}]");
+    }
+    Ok(FreeParam {
+        label: path.to_string(),
+        target: Target::Offset {
+            path: path.to_string(),
+        },
+        low: low - min,
+        high: high - max,
+        start: 0.0,
+    })
+}
+
+/// The model with the free parameters at `theta`.
+fn apply(
+    doc: &mut toml_edit::DocumentMut,
+    model: &Model,
+    params: &[FreeParam],
+    theta: &[f64],
+) -> Result<()> {
+    for (p, &v) in params.iter().zip(theta) {
+        match &p.target {
+            Target::Offset { path } => add_to(doc, path, v)?,
+            Target::Candidate { name } => switch_on(doc, model, name, v)?,
+        }
+    }
+    Ok(())
+}
+
+/// One iteration's record.
+#[derive(Debug, Clone, Serialize)]
+pub struct Step {
+    pub iteration: usize,
+    pub theta: Vec<f64>,
+    pub chi2: f64,
+    pub rmse: BTreeMap<String, f64>,
+    /// Whether this setting improved on the best before it.
+    pub accepted: bool,
+}
+
+/// The simulated row means (None where a run failed) and scatters at one setting.
+type Sims = (Vec<Option<f64>>, Vec<Option<f64>>);
+
+pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
+    if args.replicates < 2 {
+        bail!(
+            "--replicates {}: allowed 2 or more (the rows' standard errors need the runs' scatter)",
+            args.replicates
+        );
+    }
+    if args.iterations == 0 {
+        bail!("--iterations 0: allowed 1 or more");
+    }
+    let model_path = std::path::absolute(&args.model)?;
+    let model = Model::load(&model_path)?;
+    let text = std::fs::read_to_string(&model_path)?;
+    let doc: toml_edit::DocumentMut = text
+        .parse()
+        .with_context(|| format!("{}: not TOML", args.model.display()))?;
+    let rows = read_measurements(&args.data)?;
+    check_against_model(&rows, &model, &args.data)?;
+    let params: Vec<FreeParam> = args
+        .params
+        .iter()
+        .map(|s| parse(s, &model, &doc))
+        .collect::<Result<_>>()?;
+    let n = params.len();
+    let stop = execute::stop_on_signals()?;
+    let runs = args.out.join("runs");
+    let models = args.out.join("models");
+    std::fs::create_dir_all(&models)?;
+
+    // Simulates every row at `theta`, as variant `name` of iteration `it`.
+    let run = |it: usize, name: &str, theta: &[f64]| -> Result<Sims> {
+        let label = format!("iter-{it}-{name}");
+        let path = variant(&model, &text, &models, &label, |d| {
+            apply(d, &model, &params, theta)
+        })?;
+        let sims = simulate(
+            &rows,
+            &Simulate {
+                model: &path,
+                data: &args.data,
+                out: &runs.join(format!("iter-{it}")).join(name),
+                replicates: args.replicates,
+                first_seed: 1,
+                coarse: args.coarse,
+                cores: args.cores,
+                quiet: args.quiet,
+            },
+            &stop,
+        )?;
+        Ok(sims
+            .iter()
+            .map(|(v, _)| {
+                if v.len() == args.replicates {
+                    let (m, s) = mean_sd(v);
+                    (Some(m), s)
+                } else {
+                    (None, None)
+                }
+            })
+            .unzip())
+    };
+    let mut theta: Vec<f64> = params.iter().map(|p| p.start).collect();
+    let mut best: Option<(Vec<f64>, f64, Vec<f64>, Vec<f64>, DMatrix<f64>)> = None;
+    let mut lambda = 1e-3;
+    let mut radius = 0.25;
+    let mut history: Vec<Step> = vec![];
+    for it in 0..=args.iterations {
+        if !args.quiet {
+            eprintln!(
+                "fit: iteration {it} of {}: {}",
+                args.iterations,
+                show(&params, &theta)
+            );
+        }
+        let (centre, scatter) = run(it, "centre", &theta)?;
+        let failed: Vec<String> = rows
+            .iter()
+            .zip(&centre)
+            .filter(|(_, c)| c.is_none())
+            .map(|(m, _)| format!("row {}", m.row))
+            .collect();
+        if !failed.is_empty() {
+            bail!(
+                "iteration {it} ({}): runs failed at {}; see {}",
+                show(&params, &theta),
+                failed.join(", "),
+                runs.join(format!("iter-{it}")).display()
+            );
+        }
+        let centre: Vec<f64> = centre.into_iter().map(Option::unwrap).collect();
+        let se: Vec<f64> = rows
+            .iter()
+            .zip(&scatter)
+            .map(|(m, s)| {
+                std_error(*s, args.replicates, m.uncertainty)
+                    .filter(|e| *e > 0.0)
+                    .unwrap_or(1.0)
+            })
+            .collect();
+        let z: Vec<f64> = rows
+            .iter()
+            .zip(&centre)
+            .zip(&se)
+            .map(|((m, c), s)| (m.value - c) / s)
+            .collect();
+        let chi2: f64 = z.iter().map(|v| v * v).sum();
+        let accepted = best.as_ref().is_none_or(|b| chi2 < b.1);
+        history.push(Step {
+            iteration: it,
+            theta: theta.clone(),
+            chi2,
+            rmse: rmse(&rows, &centre),
+            accepted,
+        });
+        if accepted {
+            lambda = (lambda / 3.0f64).max(1e-6);
+            if it == args.iterations {
+                // No step follows: the standard errors use the last Jacobian, one step
+                // back (not worth P more settings of runs).
+                let jac = best
+                    .map(|b| b.4)
+                    .unwrap_or_else(|| DMatrix::zeros(rows.len(), n));
+                best = Some((theta.clone(), chi2, centre, se, jac));
+                break;
+            }
+            // The Jacobian at the new best setting, standardised by its standard errors.
+            let mut jac = DMatrix::zeros(rows.len(), n);
+            for (j, p) in params.iter().enumerate() {
+                let h0 = 0.05 * (p.high - p.low);
+                let h = if theta[j] + h0 <= p.high { h0 } else { -h0 };
+                let mut t = theta.clone();
+                t[j] += h;
+                let (moved, _) = run(it, &format!("param-{j}"), &t)?;
+                for i in 0..rows.len() {
+                    let m = moved[i].ok_or_else(|| {
+                        anyhow!(
+                            "iteration {it}: the runs with {} moved failed at row {}",
+                            p.label,
+                            rows[i].row
+                        )
+                    })?;
+                    jac[(i, j)] = (m - centre[i]) / h / se[i];
+                }
+            }
+            best = Some((theta.clone(), chi2, centre, se, jac));
+        } else {
+            lambda *= 4.0;
+            radius *= 0.5;
+            if it == args.iterations {
+                break;
+            }
+        }
+        let (b_theta, _, _, _, jac) = best.as_ref().unwrap();
+        let b_z: Vec<f64> = {
+            let b = best.as_ref().unwrap();
+            rows.iter()
+                .zip(&b.2)
+                .zip(&b.3)
+                .map(|((m, c), s)| (m.value - c) / s)
+                .collect()
+        };
+        let jtj = jac.transpose() * jac;
+        let jtz = jac.transpose() * DVector::from_vec(b_z);
+        let mut a = jtj.clone();
+        for k in 0..n {
+            a[(k, k)] += lambda * jtj[(k, k)].max(1e-12);
+        }
+        let d = a
+            .lu()
+            .solve(&jtz)
+            .ok_or_else(|| anyhow!("iteration {it}: the fit's normal equations are singular"))?;
+        let mut next = b_theta.clone();
+        let mut small = true;
+        for (k, p) in params.iter().enumerate() {
+            let span = p.high - p.low;
+            let step = d[k].clamp(-radius * span, radius * span);
+            next[k] = (b_theta[k] + step).clamp(p.low, p.high);
+            small &= (next[k] - b_theta[k]).abs() < 0.01 * span;
+        }
+        if small {
+            if !args.quiet {
+                eprintln!("fit: converged (every step under 1 % of its range)");
+            }
+            break;
+        }
+        theta = next;
+    }
+
+    let (b_theta, b_chi2, b_centre, _, jac) = best.expect("iteration 0 ran");
+    let dof = rows.len().saturating_sub(n).max(1);
+    let scale = (b_chi2 / dof as f64).max(1.0);
+    let cov = (jac.transpose() * &jac).try_inverse().map(|c| c * scale);
+    let sd: Vec<Option<f64>> = (0..n)
+        .map(|k| cov.as_ref().map(|c| c[(k, k)].max(0.0).sqrt()))
+        .collect();
+    let corr: Option<Vec<Vec<f64>>> = cov.as_ref().map(|c| {
+        (0..n)
+            .map(|a| {
+                (0..n)
+                    .map(|b| c[(a, b)] / (c[(a, a)] * c[(b, b)]).sqrt())
+                    .collect()
+            })
+            .collect()
+    });
+    // The fitted model, comments kept.
+    let mut fitted: toml_edit::DocumentMut = text.parse()?;
+    apply(&mut fitted, &model, &params, &b_theta)?;
+    let header = format!(
+        "# Fitted by `tilth fit` to {} ({} rows): {}\n",
+        args.data.display(),
+        rows.len(),
+        show(&params, &b_theta)
+    );
+    let model_out = args.out.join("model.toml");
+    std::fs::write(&model_out, header + &fitted.to_string())?;
+    Model::load(&model_out).context("the fitted model")?;
+
+    let first = &history[0];
+    let json = serde_json::json!({
+        "model": args.model.display().to_string(),
+        "data": args.data.display().to_string(),
+        "replicates": args.replicates,
+        "coarse": args.coarse,
+        "parameters": params,
+        "estimate": b_theta,
+        "standard_error": sd,
+        "correlation": corr,
+        "chi2": b_chi2,
+        "dof": dof,
+        "rmse_start": first.rmse,
+        "rmse": rmse(&rows, &b_centre),
+        "history": history,
+        "fitted_model": model_out.display().to_string(),
+    });
+    std::fs::write(args.out.join("fit.json"), serde_json::to_vec_pretty(&json)?)?;
+    let mut md = format!(
+        "# Fit of {} to {}\n\n{} rows, {} replicates per setting, {} free parameter{}.\n\n| parameter | start | estimate | standard error | range |\n|---|---|---|---|---|\n",
+        args.model.display(),
+        args.data.display(),
+        rows.len(),
+        args.replicates,
+        n,
+        if n == 1 { "" } else { "s" }
+    );
+    for (k, p) in params.iter().enumerate() {
+        md += &format!(
+            "| {} | {:.4} | {:.4} | {} | [{:.4}, {:.4}] |\n",
+            describe(p),
+            p.start,
+            b_theta[k],
+            sd[k].map_or("-".into(), |s| format!("{s:.4}")),
+            p.low,
+            p.high
+        );
+    }
+    md += &format!(
+        "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}).\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
+        b_chi2, first.chi2
+    );
+    let end = rmse(&rows, &b_centre);
+    for (k, v) in &end {
+        md += &format!("| {k} | {:.4} | {:.4} |\n", first.rmse[k], v);
+    }
+    md += &format!(
+        "\nThe fitted model: `{}` (for `tilth compare`).\n",
+        model_out.display()
+    );
+    std::fs::write(args.out.join("fit.md"), &md)?;
+    out.write_all(md.as_bytes())?;
+    writeln!(
+        out,
+        "\nwritten: {}/fit.{{json,md}}, model.toml",
+        args.out.display()
+    )?;
+    Ok(())
+}
+
+fn describe(p: &FreeParam) -> String {
+    match &p.target {
+        Target::Offset { path } => format!("{path} (offset)"),
+        Target::Candidate { name } => format!("candidate {name} (strength)"),
+    }
+}
+
+fn show(params: &[FreeParam], theta: &[f64]) -> String {
+    params
+        .iter()
+        .zip(theta)
+        .map(|(p, v)| format!("{} {v:+.4}", p.label))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// RMSE of simulated - measured per observable, in its unit.
+fn rmse(rows: &[Measurement], sim: &[f64]) -> BTreeMap<String, f64> {
+    let mut acc: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    for (m, s) in rows.iter().zip(sim) {
+        let e = acc.entry(m.observable.clone()).or_default();
+        e.0 += (s - m.value).powi(2);
+        e.1 += 1;
+    }
+    acc.into_iter()
+        .map(|(k, (ss, n))| (k, (ss / n as f64).sqrt()))
+        .collect()
+}

@@ -1,0 +1,123 @@
+//! `tilth fit`: bad parameters are refused before any run; the fitted model file is what was
+//! simulated (compare of it, with the same seeds, gives the RMSE fit reported); the best
+//! setting is never worse than the start.
+
+use std::path::PathBuf;
+
+use crate::tilth_in_root as tilth;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const DATA: &str = "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source
+repose,6,,,heap_cone_angle_deg,41.0,deg,0.8,4,made up for the test
+repose,6,,,funnel_flow_rate_g_s,480,g/s,15,4,made up for the test
+repose,12,,,heap_cone_angle_deg,45.0,deg,0.8,4,made up for the test
+repose,12,,,funnel_flow_rate_g_s,380,g/s,15,4,made up for the test
+";
+
+#[test]
+fn bad_parameters_are_refused_before_any_run() {
+    let dir = scratch("fit-refused");
+    let data = dir.join("data.csv");
+    std::fs::write(&data, DATA).unwrap();
+    for (param, expect) in [
+        ("soil-soil.rolling_friction=0.2:0.45", "outside [0.2, 0.45]"),
+        ("candidate.fines=0:1", "has no [candidates.fines]"),
+        ("candidate.twisting=0:1@2", "the start 2 is outside [0, 1]"),
+        ("soil-soil.rolling_friction=0.4:0.1", "LOW < HIGH"),
+        ("rolling_friction=0:1", "expected PAIR.KEY=LOW:HIGH"),
+    ] {
+        let out = dir.join("out");
+        let o = tilth(&[
+            "fit",
+            "--model",
+            "models/li2022.toml",
+            "--data",
+            data.to_str().unwrap(),
+            "--param",
+            param,
+            "--out",
+            out.to_str().unwrap(),
+            "--coarse",
+            "--quiet",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{param}: accepted");
+        assert!(err.contains(expect), "{param}: `{expect}` not in {err}");
+        assert!(!out.join("runs").exists(), "{param}: runs started");
+    }
+}
+
+#[test]
+fn the_fitted_model_is_what_was_simulated() {
+    let dir = scratch("fit-consistent");
+    let data = dir.join("data.csv");
+    std::fs::write(&data, DATA).unwrap();
+    let out = dir.join("fit");
+    let o = tilth(&[
+        "fit",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        data.to_str().unwrap(),
+        "--param",
+        "soil-soil.rolling_friction=0.05:0.45",
+        "--param",
+        "candidate.twisting=0:0.5@0.1",
+        "--replicates",
+        "2",
+        "--iterations",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--coarse",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fit: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("fit.json")).unwrap()).unwrap();
+    let history = fit["history"].as_array().unwrap();
+    assert!(!history.is_empty());
+    let chi2 = fit["chi2"].as_f64().unwrap();
+    assert!(
+        chi2 <= history[0]["chi2"].as_f64().unwrap(),
+        "best worse than the start"
+    );
+    let model = std::fs::read_to_string(out.join("model.toml")).unwrap();
+    assert!(
+        model.contains("extra = [\"twisting\"]"),
+        "the candidate is on: {model}"
+    );
+    assert!(model.contains("# Fitted by `tilth fit`"));
+    // compare of the fitted model with the same seeds (1..2) reproduces the fit's RMSE.
+    let cmp = dir.join("compare");
+    let o = tilth(&[
+        "compare",
+        "--model",
+        out.join("model.toml").to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        cmp.to_str().unwrap(),
+        "--replicates",
+        "2",
+        "--coarse",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cmp.join("compare.json")).unwrap()).unwrap();
+    for (k, v) in fit["rmse"].as_object().unwrap() {
+        let again = c["observables"][k]["rmse"].as_f64().unwrap();
+        let v = v.as_f64().unwrap();
+        assert!(
+            (again - v).abs() <= 1e-9 * v.abs().max(1.0),
+            "{k}: fit {v}, compare {again}"
+        );
+    }
+}
