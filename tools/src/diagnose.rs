@@ -33,6 +33,12 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 /// confounded with them.
 pub const MIN_DISTINCT: f64 = 0.1;
 
+/// Two identifiable candidates whose signatures, after what the free parameters absorb,
+/// point this close to the same way (|cos| of the angle between g_a and g_b) are reported
+/// as alike: the data cannot rank one above the other with confidence, however
+/// significant each is. At 0.8 the part of one that the other cannot mimic is 0.6 of it.
+pub const ALIKE_COSINE: f64 = 0.8;
+
 /// One candidate's standardised sensitivity.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Candidate {
@@ -79,6 +85,12 @@ pub struct Score {
     /// standardised residuals left after recalibration (zero when not identifiable).
     #[serde(skip)]
     pub fitted_change: Vec<f64>,
+    /// Other identifiable candidates with signatures alike (|cos| >= [`ALIKE_COSINE`] after
+    /// the free parameters), with the cosine: the data cannot tell these apart.
+    pub alike: Vec<(String, f64)>,
+    /// g = M j, the signature the free parameters leave.
+    #[serde(skip)]
+    pub signature: Vec<f64>,
 }
 
 /// The tests, best first (identifiable candidates by statistic, then the others).
@@ -140,10 +152,29 @@ pub fn score_tests(
                 identifiable,
                 unidentified: reason,
                 fitted_change: (&g * strength).iter().copied().collect(),
+                alike: vec![],
+                signature: g.iter().copied().collect(),
             }
         })
         .collect();
     holm(&mut scores);
+    let n = scores.len();
+    for a in 0..n {
+        for b in 0..n {
+            if a == b || !scores[a].identifiable || !scores[b].identifiable {
+                continue;
+            }
+            let (ga, gb) = (&scores[a].signature, &scores[b].signature);
+            let dot: f64 = ga.iter().zip(gb).map(|(x, y)| x * y).sum();
+            let na: f64 = ga.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let nb: f64 = gb.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let cos = dot / (na * nb);
+            if cos.abs() >= ALIKE_COSINE {
+                let name = scores[b].name.clone();
+                scores[a].alike.push((name, cos));
+            }
+        }
+    }
     scores.sort_by(|a, b| {
         b.identifiable
             .cmp(&a.identifiable)
@@ -263,6 +294,32 @@ mod tests {
         assert!(s.iter().find(|c| c.name == "a").unwrap().p_value > 0.01);
     }
 
+    /// A candidate that is another's signature plus a little of its own is reported alike
+    /// to it (both ways, with the cosine), an unrelated one is not.
+    #[test]
+    fn candidates_with_alike_signatures_are_named() {
+        let (x, mut cands) = problem(5);
+        let mut rng = ChaCha8Rng::seed_from_u64(50);
+        let own = normal(&mut rng, 24);
+        let twin: Vec<f64> = (0..24)
+            .map(|i| 1.5 * cands[1].sensitivity[i] + 0.2 * own[i])
+            .collect();
+        cands.push(Candidate {
+            name: "twin".into(),
+            sensitivity: twin,
+            sensitivity_var: vec![],
+        });
+        let r: Vec<f64> = (0..24).map(|i| cands[1].sensitivity[i]).collect();
+        let s = score_tests(&r, &x, &cands);
+        let get = |n: &str| s.iter().find(|c| c.name == n).unwrap();
+        let b = get("b");
+        assert_eq!(b.alike.len(), 1, "{:?}", b.alike);
+        assert_eq!(b.alike[0].0, "twin");
+        assert!(b.alike[0].1 > ALIKE_COSINE && b.alike[0].1 < 1.0);
+        assert_eq!(get("twin").alike[0].0, "b");
+        assert!(get("a").alike.is_empty(), "{:?}", get("a").alike);
+    }
+
     #[test]
     fn with_no_hidden_effect_nothing_is_flagged_in_19_of_20_seeds() {
         let (x, cands) = problem(11);
@@ -339,6 +396,8 @@ mod tests {
                 identifiable: true,
                 unidentified: None,
                 fitted_change: vec![],
+                alike: vec![],
+                signature: vec![],
             })
             .collect();
         holm(&mut s);

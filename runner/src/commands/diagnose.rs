@@ -419,6 +419,17 @@ fn report(
                 tilth_tools::compare::p_text(best.score.p_value),
                 best.score.strength
             );
+            if !best.score.alike.is_empty() {
+                md += &format!(
+                    " But its signature is alike to {}'s: these measurements cannot tell them apart, so the ranking between them is not a discovery; a test or condition where their effects differ can.",
+                    best.score
+                        .alike
+                        .iter()
+                        .map(|(n, c)| format!("{n} (cos {c:.2})"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
             if sig.len() > 1 {
                 md += &format!(
                     " Also significant: {}; test again after adding the first, as candidates with similar signatures share the same residual.",
