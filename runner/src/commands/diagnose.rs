@@ -421,11 +421,11 @@ fn report(
             );
             if !best.score.alike.is_empty() {
                 md += &format!(
-                    " But its signature is alike to {}'s: these measurements cannot tell them apart, so the ranking between them is not a discovery; a test or condition where their effects differ can.",
+                    " But its signature is alike to {}: these measurements cannot tell them apart, so the ranking between them is not a discovery; a test or condition where their effects differ can.",
                     best.score
                         .alike
                         .iter()
-                        .map(|(n, c)| format!("{n} (cos {c:.2})"))
+                        .map(|(n, c)| format!("{n}'s (cos {c:.2})"))
                         .collect::<Vec<_>>()
                         .join(", ")
                 );

@@ -17,7 +17,7 @@
 //! numbers: the differences carry less of the runs' scatter). Residuals are standardised by
 //! each row's standard error sqrt(uncertainty^2 + s^2 / R), s the current setting's scatter:
 //! chi^2 = sum z^2. The step solves (J'J + lambda diag J'J) d = J'z, limited to a quarter of
-//! each range; a step that raises chi^2 is taken back and lambda raised (Marquardt 1963).
+//! each range; a step that raises chi^2 is taken back, lambda raised and the next step at most half as long (Marquardt 1963).
 //! Standard errors from (J'J)^-1, scaled by chi^2 / dof when that is above 1.
 //!
 //! Writes `DIR/fit.json` (estimate, standard errors, correlations, the history),
@@ -259,6 +259,8 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     let mut best: Option<(Vec<f64>, f64, Vec<f64>, Vec<f64>, DMatrix<f64>)> = None;
     let mut lambda = 1e-3;
     let mut radius = 0.25;
+    // The last step, as a fraction of each range (its largest component).
+    let mut last_step = 0.25f64;
     let mut history: Vec<Step> = vec![];
     for it in 0..=args.iterations {
         if !args.quiet {
@@ -341,7 +343,9 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             best = Some((theta.clone(), chi2, centre, se, jac));
         } else {
             lambda *= 4.0;
-            radius *= 0.5;
+            // Back to the best setting, with a step half as long as the one that failed
+            // (raising lambda alone hardly shortens a step that was small to begin with).
+            radius = 0.5 * last_step;
             if it == args.iterations {
                 break;
             }
@@ -367,11 +371,13 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             .ok_or_else(|| anyhow!("iteration {it}: the fit's normal equations are singular"))?;
         let mut next = b_theta.clone();
         let mut small = true;
+        last_step = 0.0;
         for (k, p) in params.iter().enumerate() {
             let span = p.high - p.low;
             let step = d[k].clamp(-radius * span, radius * span);
             next[k] = (b_theta[k] + step).clamp(p.low, p.high);
             small &= (next[k] - b_theta[k]).abs() < 0.01 * span;
+            last_step = last_step.max((next[k] - b_theta[k]).abs() / span);
         }
         if small {
             if !args.quiet {
