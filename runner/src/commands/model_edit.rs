@@ -202,8 +202,10 @@ pub fn values_of(doc: &toml_edit::DocumentMut, path: &str) -> Result<Vec<f64>> {
     let (pair, key) = path
         .split_once('.')
         .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
-    let table = doc["pairs"][pair]
-        .as_table_like()
+    let table = doc
+        .get("pairs")
+        .and_then(|p| p.get(pair))
+        .and_then(|t| t.as_table_like())
         .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
     let Some(v) = table.get(key).and_then(|i| i.as_value()) else {
         return Ok(vec![0.0]);
@@ -233,4 +235,97 @@ pub fn values_of(doc: &toml_edit::DocumentMut, path: &str) -> Result<Vec<f64>> {
         .take(if all { arr.len() } else { 1 })
         .filter_map(num)
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc() -> toml_edit::DocumentMut {
+        "[pairs.soil-soil]\nfriction = 0.8\nrolling = { interpolate = \"moisture_pct\", x = [3, 6, 12], y = [0.1, 0.2, 0.4] }\npoly = { polynomial = \"moisture_pct\", coefficients = [1.0, 2.0] }\n"
+            .parse()
+            .unwrap()
+    }
+
+    fn value(d: &toml_edit::DocumentMut, key: &str) -> String {
+        d["pairs"]["soil-soil"][key].as_value().unwrap().to_string()
+    }
+
+    #[test]
+    fn add_to_raises_numbers_tables_and_polynomial_constants() {
+        let mut d = doc();
+        add_to(&mut d, "soil-soil.friction", 0.25).unwrap();
+        add_to(&mut d, "soil-soil.rolling", 0.5).unwrap();
+        add_to(&mut d, "soil-soil.poly", 0.5).unwrap();
+        add_to(&mut d, "soil-soil.new_key", 0.125).unwrap();
+        assert_eq!(d["pairs"]["soil-soil"]["friction"].as_float(), Some(1.05));
+        assert!(
+            value(&d, "rolling").contains("y = [0.6, 0.7, 0.9]"),
+            "{}",
+            value(&d, "rolling")
+        );
+        assert!(
+            value(&d, "poly").contains("coefficients = [1.5, 2.0]"),
+            "{}",
+            value(&d, "poly")
+        );
+        assert_eq!(d["pairs"]["soil-soil"]["new_key"].as_float(), Some(0.125));
+        assert!(add_to(&mut d, "soil-steel.friction", 0.1).is_err());
+    }
+
+    fn ys(d: &toml_edit::DocumentMut, key: &str) -> Vec<f64> {
+        d["pairs"]["soil-soil"][key]["y"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_float().unwrap())
+            .collect()
+    }
+
+    fn close(a: &[f64], b: &[f64]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+    }
+
+    #[test]
+    fn add_slope_tilts_about_the_middle_of_the_range() {
+        let mut d = doc();
+        // Range [3, 12], middle 7.5: a number becomes a two-point table.
+        add_slope(
+            &mut d,
+            "soil-soil.friction",
+            "moisture_pct",
+            3.0,
+            12.0,
+            0.02,
+        )
+        .unwrap();
+        assert!(value(&d, "friction").contains("x = [3.0, 12.0]"));
+        assert!(
+            close(&ys(&d, "friction"), &[0.8 - 0.09, 0.8 + 0.09]),
+            "{:?}",
+            ys(&d, "friction")
+        );
+        // A table over the same condition: each point tilted (3: -0.09, 6: -0.03, 12: +0.09).
+        add_slope(&mut d, "soil-soil.rolling", "moisture_pct", 3.0, 12.0, 0.02).unwrap();
+        assert!(
+            close(&ys(&d, "rolling"), &[0.1 - 0.09, 0.2 - 0.03, 0.4 + 0.09]),
+            "{:?}",
+            ys(&d, "rolling")
+        );
+        // A polynomial cannot take a slope.
+        assert!(add_slope(&mut d, "soil-soil.poly", "moisture_pct", 3.0, 12.0, 0.02).is_err());
+    }
+
+    #[test]
+    fn values_of_reads_what_add_to_shifts() {
+        let d = doc();
+        assert_eq!(values_of(&d, "soil-soil.friction").unwrap(), vec![0.8]);
+        assert_eq!(
+            values_of(&d, "soil-soil.rolling").unwrap(),
+            vec![0.1, 0.2, 0.4]
+        );
+        assert_eq!(values_of(&d, "soil-soil.poly").unwrap(), vec![1.0]);
+        assert_eq!(values_of(&d, "soil-soil.missing").unwrap(), vec![0.0]);
+        assert!(values_of(&d, "soil-steel.friction").is_err());
+    }
 }
