@@ -111,19 +111,7 @@ fn parse(s: &str, model: &Model, doc: &toml_edit::DocumentMut) -> Result<FreePar
     }
     let path = path.trim();
     if let Some(name) = path.strip_prefix("candidate.") {
-        if !model.file.candidates.contains_key(name) {
-            bail!(
-                "--param {s:?}: {} has no [candidates.{name}]; it has {}",
-                model.path.display(),
-                model
-                    .file
-                    .candidates
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
+        super::model_edit::has_candidate(model, name, &format!("--param {s:?}"))?;
         let start = start.map(num).transpose()?.unwrap_or(0.0);
         if !(low..=high).contains(&start) {
             bail!("--param {s:?}: the start {start} is outside [{low}, {high}]");

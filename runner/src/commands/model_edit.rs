@@ -196,6 +196,20 @@ pub fn variant(
     Ok(path)
 }
 
+/// An error unless the model file has `[candidates.NAME]`, naming the ones it has; `what`
+/// says which argument asked (`--param "candidate.x=0:1"`).
+pub fn has_candidate(model: &Model, name: &str, what: &str) -> Result<()> {
+    if model.file.candidates.contains_key(name) {
+        return Ok(());
+    }
+    let all: Vec<&str> = model.file.candidates.keys().map(String::as_str).collect();
+    bail!(
+        "{what}: {} has no [candidates.{name}]; it has {}",
+        model.path.display(),
+        all.join(", ")
+    )
+}
+
 /// The numbers `pairs.PAIR.KEY` holds: the number, each `y` of an `interpolate` table, or
 /// the constant of a `polynomial`; a missing key holds 0. What [`add_to`] shifts.
 pub fn values_of(doc: &toml_edit::DocumentMut, path: &str) -> Result<Vec<f64>> {

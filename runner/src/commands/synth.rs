@@ -139,19 +139,7 @@ fn hide_effects(model: &Model, with: &[String], out: &Path) -> Result<PathBuf> {
             .split_once('=')
             .ok_or_else(|| anyhow!("--with `{w}`: expected NAME=STRENGTH"))?;
         let name = name.trim();
-        if !model.file.candidates.contains_key(name) {
-            bail!(
-                "--with `{w}`: {} has no [candidates.{name}]; it has {}",
-                model.path.display(),
-                model
-                    .file
-                    .candidates
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
+        super::model_edit::has_candidate(model, name, &format!("--with `{w}`"))?;
         let s: f64 = v
             .trim()
             .parse()
