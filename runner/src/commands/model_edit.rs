@@ -7,6 +7,25 @@ use crate::lab::model::Model;
 use anyhow::{Context, Result, anyhow, bail};
 use std::path::{Path, PathBuf};
 
+/// A TOML number as f64.
+fn number(v: &toml_edit::Value) -> Option<f64> {
+    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
+}
+
+/// Which array of a value table [`add_to`] shifts: every `y` of an `interpolate` table
+/// (true: all of it) or the constant of a `polynomial`'s `coefficients` (false: the first).
+fn varied_list(t: &toml_edit::InlineTable, pair: &str, key: &str) -> Result<(&'static str, bool)> {
+    if t.contains_key("interpolate") {
+        Ok(("y", true))
+    } else if t.contains_key("polynomial") {
+        Ok(("coefficients", false))
+    } else {
+        bail!(
+            "pairs.{pair}.{key}: only a number, an interpolate or a polynomial table can be varied"
+        )
+    }
+}
+
 /// Adds `delta` to `pairs.PAIR.KEY` of a model document: a number, each `y` of an
 /// `interpolate` table, or the constant of a `polynomial`; a missing key becomes `delta`.
 pub fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Result<()> {
@@ -23,21 +42,12 @@ pub fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Resul
     let v = item
         .as_value_mut()
         .ok_or_else(|| anyhow!("pairs.{pair}.{key} is not a value"))?;
-    let num = |v: &toml_edit::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
-    if let Some(x) = num(v) {
+    if let Some(x) = number(v) {
         *v = (x + delta).into();
         return Ok(());
     }
     if let Some(t) = v.as_inline_table_mut() {
-        let (list, all) = if t.contains_key("interpolate") {
-            ("y", true)
-        } else if t.contains_key("polynomial") {
-            ("coefficients", false)
-        } else {
-            bail!(
-                "pairs.{pair}.{key}: only a number, an interpolate or a polynomial table can be varied"
-            );
-        };
+        let (list, all) = varied_list(t, pair, key)?;
         let arr = t
             .get_mut(list)
             .and_then(|a| a.as_array_mut())
@@ -46,7 +56,7 @@ pub fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Resul
             if k > 0 && !all {
                 break;
             }
-            let x = num(arr.get(k).unwrap())
+            let x = number(arr.get(k).unwrap())
                 .ok_or_else(|| anyhow!("pairs.{pair}.{key}.{list}[{k}] is not a number"))?;
             arr.replace(k, x + delta);
         }
@@ -73,11 +83,10 @@ pub fn add_slope(
     let table = doc["pairs"][pair]
         .as_table_like_mut()
         .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
-    let num = |v: &toml_edit::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
     let current = table.get(key).and_then(|i| i.as_value().cloned());
     let base = match &current {
         None => Some(0.0),
-        Some(v) => num(v),
+        Some(v) => number(v),
     };
     if let Some(b) = base {
         let mut t = toml_edit::InlineTable::new();
@@ -104,7 +113,7 @@ pub fn add_slope(
     let xs: Vec<f64> = t
         .get("x")
         .and_then(|a| a.as_array())
-        .map(|a| a.iter().filter_map(num).collect())
+        .map(|a| a.iter().filter_map(number).collect())
         .unwrap_or_default();
     let ys = t
         .get_mut("y")
@@ -114,7 +123,7 @@ pub fn add_slope(
         bail!("pairs.{pair}.{key}: x and y differ in length");
     }
     for (k, x) in xs.iter().enumerate() {
-        let y = num(ys.get(k).unwrap())
+        let y = number(ys.get(k).unwrap())
             .ok_or_else(|| anyhow!("pairs.{pair}.{key}.y[{k}] is not a number"))?;
         ys.replace(k, y + slope * (x - mid));
     }
@@ -224,22 +233,13 @@ pub fn values_of(doc: &toml_edit::DocumentMut, path: &str) -> Result<Vec<f64>> {
     let Some(v) = table.get(key).and_then(|i| i.as_value()) else {
         return Ok(vec![0.0]);
     };
-    let num = |v: &toml_edit::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
-    if let Some(x) = num(v) {
+    if let Some(x) = number(v) {
         return Ok(vec![x]);
     }
     let t = v
         .as_inline_table()
         .ok_or_else(|| anyhow!("pairs.{pair}.{key} cannot be varied"))?;
-    let (list, all) = if t.contains_key("interpolate") {
-        ("y", true)
-    } else if t.contains_key("polynomial") {
-        ("coefficients", false)
-    } else {
-        bail!(
-            "pairs.{pair}.{key}: only a number, an interpolate or a polynomial table can be varied"
-        );
-    };
+    let (list, all) = varied_list(t, pair, key)?;
     let arr = t
         .get(list)
         .and_then(|a| a.as_array())
@@ -247,7 +247,7 @@ pub fn values_of(doc: &toml_edit::DocumentMut, path: &str) -> Result<Vec<f64>> {
     Ok(arr
         .iter()
         .take(if all { arr.len() } else { 1 })
-        .filter_map(num)
+        .filter_map(number)
         .collect())
 }
 
