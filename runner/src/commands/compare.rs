@@ -12,8 +12,8 @@ use super::measurements::check_against_model;
 pub use super::measurements::{Measurement, read_measurements};
 use crate::lab::model::Model;
 use crate::sweep::execute::{self, Options};
-use crate::sweep::job::{RunSummary, Status, read_summary, run_dir};
-use crate::sweep::plan::{Factor, Plan, PlannedRun};
+use crate::sweep::job::{RunSummary, Status, read_summary, run_dir, write_atomic};
+use crate::sweep::plan::{Factor, Plan, PlannedRun, fnv1a};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use serde::Serialize;
@@ -50,6 +50,11 @@ pub struct CompareArgs {
     pub cores: Option<usize>,
     #[arg(long)]
     pub quiet: bool,
+    /// Keep the runs in this directory, keyed by the model file's content, the test, the
+    /// conditions and the seeds, and reuse any run already there, whichever command made it
+    /// (one command at a time per cache).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
 }
 
 /// One line of the comparison.
@@ -119,6 +124,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             coarse: args.coarse,
             cores: args.cores,
             quiet: args.quiet,
+            cache: args.cache.as_deref(),
         },
         &stop,
     )?;
@@ -144,6 +150,10 @@ pub struct Simulate<'a> {
     pub coarse: bool,
     pub cores: Option<usize>,
     pub quiet: bool,
+    /// A run cache shared between commands: runs go to `cache/<test>-<key>/`, the key made of
+    /// the model file's content, the test, the conditions and the seeds, so that any command
+    /// that needs the same runs finds them done (`--cache`).
+    pub cache: Option<&'a Path>,
 }
 
 /// Simulates every row (its test at its conditions, `replicates` seeds), reusing finished
@@ -155,6 +165,10 @@ pub fn simulate(
     how: &Simulate,
     stop: &Arc<AtomicBool>,
 ) -> Result<Vec<(Vec<f64>, Vec<String>)>> {
+    let model = match how.cache {
+        Some(cache) => cached_model(how.model, cache)?,
+        None => how.model.to_path_buf(),
+    };
     let mut tests: Vec<&str> = vec![];
     for m in rows {
         if !tests.contains(&m.test.as_str()) {
@@ -199,15 +213,18 @@ pub fn simulate(
                 });
             }
         }
-        let text = experiment_text(test, how.model, how.coarse);
+        let text = experiment_text(test, &model, how.coarse);
         let plan = Plan::generated(test, text, Path::new("."), factors, runs)
             .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
-        plans.push((test.to_string(), plan));
+        let dir = match how.cache {
+            Some(cache) => cache.join(format!("{test}-{}", plan.fingerprint)),
+            None => how.out.join(test),
+        };
+        plans.push((test.to_string(), plan, dir));
     }
     let mut by_row: BTreeMap<usize, (Vec<f64>, Vec<String>)> = BTreeMap::new();
-    for (test, plan) in &plans {
-        let dir = how.out.join(test);
-        run_generated(plan, &dir, how.cores, how.quiet, stop)?;
+    for (test, plan, dir) in &plans {
+        run_generated(plan, dir, how.cores, how.quiet, stop)?;
         for (i, m) in rows.iter().enumerate().filter(|(_, m)| &m.test == test) {
             let (sims, problems) = by_row.entry(m.row).or_default();
             for run in plan.runs.iter().filter(|r| r.std == group[i]) {
@@ -246,6 +263,20 @@ pub fn observed(s: &RunSummary, observable: &str) -> Option<f64> {
 }
 
 /// Runs (or resumes) a generated plan into `dir`, pinned, with a progress bar unless `quiet`.
+/// The model file's copy in the cache, named by its content, so that the runs' fingerprint
+/// (which holds the model's path) is the same for every copy of the same model.
+fn cached_model(model: &Path, cache: &Path) -> Result<PathBuf> {
+    let text = std::fs::read_to_string(model)
+        .with_context(|| format!("{}: cannot read", model.display()))?;
+    let dir = std::path::absolute(cache.join("models"))?;
+    std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    let path = dir.join(format!("{}.toml", fnv1a(&[&text])));
+    if std::fs::read_to_string(&path).ok().as_deref() != Some(text.as_str()) {
+        write_atomic(&path, text.as_bytes())?;
+    }
+    Ok(path)
+}
+
 pub fn run_generated(
     plan: &Plan,
     dir: &Path,

@@ -59,6 +59,11 @@ pub struct DiagnoseArgs {
     pub cores: Option<usize>,
     #[arg(long)]
     pub quiet: bool,
+    /// Keep the runs in this directory, keyed by the model file's content, the test, the
+    /// conditions and the seeds, and reuse any run already there, whichever command made it
+    /// (one command at a time per cache).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
 }
 
 /// A candidate's result, as written.
@@ -192,6 +197,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                 coarse: args.coarse,
                 cores: args.cores,
                 quiet: args.quiet,
+                cache: args.cache.as_deref(),
             },
             &stop,
         )?;

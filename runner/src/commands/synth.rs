@@ -72,6 +72,11 @@ pub struct SynthArgs {
     pub cores: Option<usize>,
     #[arg(long)]
     pub quiet: bool,
+    /// Keep the runs in this directory, keyed by the model file's content, the test, the
+    /// conditions and the seeds, and reuse any run already there, whichever command made it
+    /// (one command at a time per cache).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
 }
 
 /// Noise of one observable.
@@ -252,6 +257,7 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
             coarse: args.coarse,
             cores: args.cores,
             quiet: args.quiet,
+            cache: args.cache.as_deref(),
         },
         &stop,
     )?;

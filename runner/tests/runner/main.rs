@@ -1,5 +1,6 @@
 //! Tests of the `tilth` front end: scene files good and bad, and the binary end to end.
 
+mod cache;
 mod calibrate;
 mod config_files;
 mod diagnose;

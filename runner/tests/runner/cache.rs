@@ -1,0 +1,105 @@
+//! `--cache DIR`: runs are keyed by the model file's content, the test, the conditions and
+//! the seeds, so a second command with a copy of the model at another path reuses them,
+//! and a changed model gets runs of its own.
+
+use std::path::{Path, PathBuf};
+
+use crate::tilth_in_root as tilth;
+
+const DATA: &str = "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source
+repose,6,,,heap_cone_angle_deg,41.0,deg,0.8,4,made up for the test
+repose,6,,,tray_mass_g,20.0,g,0.5,4,made up for the test
+";
+
+fn run_dirs(cache: &Path) -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(cache)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("repose-")
+        })
+        .collect();
+    dirs.sort();
+    dirs
+}
+
+fn mtimes(dir: &Path) -> Vec<std::time::SystemTime> {
+    let mut out = vec![];
+    for e in std::fs::read_dir(dir.join("runs")).unwrap() {
+        let summary = e.unwrap().path().join("summary.json");
+        out.push(std::fs::metadata(summary).unwrap().modified().unwrap());
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn a_cache_is_shared_by_commands_and_keyed_by_the_models_content() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cache-shared");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = dir.join("data.csv");
+    std::fs::write(&data, DATA).unwrap();
+    let cache = dir.join("cache");
+    let model = std::fs::read_to_string("../models/li2022.toml").unwrap();
+    let copy = dir.join("copy.toml");
+    std::fs::write(&copy, &model).unwrap();
+    let common = |model: &Path, out: &str| -> Vec<String> {
+        [
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            dir.join(out).to_str().unwrap(),
+            "--replicates",
+            "2",
+            "--cache",
+            cache.to_str().unwrap(),
+            "--coarse",
+            "--quiet",
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |args: Vec<String>| {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = tilth(&args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    let mut first = vec!["compare".to_string()];
+    first.extend(common(Path::new("models/li2022.toml"), "compare"));
+    run(first);
+    let dirs = run_dirs(&cache);
+    assert_eq!(dirs.len(), 1, "one sweep for one test: {dirs:?}");
+    let before = mtimes(&dirs[0]);
+    assert_eq!(before.len(), 2, "one condition x 2 replicates");
+
+    // The same model at another path (as `diagnose` writes its `base` variant): nothing is
+    // run again.
+    let mut again = vec!["compare".to_string()];
+    again.extend(common(&copy, "compare-copy"));
+    run(again);
+    assert_eq!(run_dirs(&cache), dirs);
+    assert_eq!(mtimes(&dirs[0]), before, "the runs were redone");
+    let a = std::fs::read_to_string(dir.join("compare/compare.csv")).unwrap();
+    let b = std::fs::read_to_string(dir.join("compare-copy/compare.csv")).unwrap();
+    assert_eq!(a, b);
+
+    // Another model (one number changed): runs of its own, the first ones untouched.
+    let changed = model.replace("restitution = 0.45", "restitution = 0.5");
+    assert_ne!(changed, model);
+    std::fs::write(&copy, changed).unwrap();
+    let mut other = vec!["compare".to_string()];
+    other.extend(common(&copy, "compare-changed"));
+    run(other);
+    assert_eq!(run_dirs(&cache).len(), 2);
+    assert_eq!(mtimes(&dirs[0]), before);
+}
