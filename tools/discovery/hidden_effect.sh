@@ -7,15 +7,18 @@
 #   tools/discovery/hidden_effect.sh EFFECT STRENGTH OUT [SEED]
 #   tools/discovery/hidden_effect.sh plastic_adhesion 0.05 runs/hidden-plastic
 #
-# Environment: TILTH (the binary; default target/release/tilth), R (replicates per run
-# setting, default 4), NOISE (default below), FREE (the model's free parameter).
+# Environment: TILTH (the binary; default target/release/tilth), MODEL (default
+# models/li2022.toml), R (replicates per run setting, default 4), NOISE (default below), FREE
+# (the model's free parameter), CACHE (the run cache, default OUT/cache: give several
+# studies of one model the same cache and they share the model's runs).
 set -euo pipefail
 effect=$1 strength=$2 out=$3 seed=${4:-1}
 tilth=${TILTH:-target/release/tilth}
 R=${R:-4}
 NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%}
 FREE=${FREE:-soil-soil.rolling_friction=0.05:0.45}
-model=models/li2022.toml
+model=${MODEL:-models/li2022.toml}
+cache=${CACHE:-$out/cache}
 mkdir -p "$out"
 {
   echo "test,moisture_pct,observable"
@@ -25,19 +28,28 @@ mkdir -p "$out"
 } > "$out/conditions.csv"
 
 "$tilth" synth --truth "$model" --with "$effect=$strength" --conditions "$out/conditions.csv" \
-  --noise "$NOISE" --replicates "$R" --seed "$seed" --out "$out/data.csv" --coarse --quiet
+  --noise "$NOISE" --replicates "$R" --seed "$seed" --out "$out/data.csv" --coarse --quiet --cache "$cache"
 "$tilth" compare --model "$model" --data "$out/data.csv" --out "$out/1-compare" \
-  --replicates "$R" --coarse --quiet > /dev/null
+  --replicates "$R" --coarse --quiet --cache "$cache" > /dev/null
 "$tilth" diagnose --model "$model" --data "$out/data.csv" --out "$out/2-diagnose" \
-  --param "$FREE" --replicates "$R" --coarse --quiet > /dev/null
-top=$(python3 -c "import json,sys; c=json.load(open('$out/2-diagnose/diagnosis.json'))['candidates'][0]; print(c['name'], max(c['strength'], 0.0), c['significant'])")
-read -r name est significant <<< "$top"
+  --param "$FREE" --replicates "$R" --coarse --quiet --cache "$cache" > /dev/null
+# The first candidate's strength, free in [0, max(3 x its estimate, 2 x its step)] from the
+# estimate: what a user knows after the diagnosis (the hidden strength is not used).
+top=$(python3 - "$out/2-diagnose/diagnosis.json" "$model" <<'PY'
+import json, sys, tomllib
+c = json.load(open(sys.argv[1]))["candidates"][0]
+step = tomllib.load(open(sys.argv[2], "rb"))["candidates"][c["name"]]["step"]
+est = max(c["strength"], 0.0)
+print(c["name"], est, max(3 * est, 2 * step), c["significant"])
+PY
+)
+read -r name est hi significant <<< "$top"
 echo "diagnose: first $name (strength $est, significant: $significant); hidden: $effect"
 "$tilth" fit --model "$model" --data "$out/data.csv" --out "$out/3-fit" \
-  --param "$FREE" --param "candidate.$name=0:$(python3 -c "print(max(4*$est, 4*$strength))")@$est" \
-  --replicates "$R" --iterations 3 --coarse --quiet > /dev/null
+  --param "$FREE" --param "candidate.$name=0:$hi@$est" \
+  --replicates "$R" --iterations 3 --coarse --quiet --cache "$cache" > /dev/null
 "$tilth" compare --model "$out/3-fit/model.toml" --data "$out/data.csv" --out "$out/4-compare" \
-  --replicates "$R" --coarse --quiet > /dev/null
+  --replicates "$R" --coarse --quiet --cache "$cache" > /dev/null
 "$tilth" report "$out" > /dev/null
 python3 - "$out" <<'PY'
 import json, sys, math

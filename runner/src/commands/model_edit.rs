@@ -26,15 +26,32 @@ fn varied_list(t: &toml_edit::InlineTable, pair: &str, key: &str) -> Result<(&'s
     }
 }
 
-/// Adds `delta` to `pairs.PAIR.KEY` of a model document: a number, each `y` of an
+/// The table a `HEAD.KEY` path names: `[particles]` for `particles.KEY` (the size mix;
+/// created when missing), else `[pairs.HEAD]`.
+fn table_mut<'a>(
+    doc: &'a mut toml_edit::DocumentMut,
+    head: &str,
+) -> Result<&'a mut dyn toml_edit::TableLike> {
+    if head == "particles" {
+        if doc.get("particles").is_none() {
+            doc.insert("particles", toml_edit::table());
+        }
+        return doc["particles"]
+            .as_table_like_mut()
+            .ok_or_else(|| anyhow!("[particles] is not a table"));
+    }
+    doc["pairs"][head]
+        .as_table_like_mut()
+        .ok_or_else(|| anyhow!("the model has no [pairs.{head}]"))
+}
+
+/// Adds `delta` to `pairs.PAIR.KEY` (or `particles.KEY`) of a model document: a number, each `y` of an
 /// `interpolate` table, or the constant of a `polynomial`; a missing key becomes `delta`.
 pub fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Result<()> {
     let (pair, key) = path
         .split_once('.')
         .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
-    let table = doc["pairs"][pair]
-        .as_table_like_mut()
-        .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
+    let table = table_mut(doc, pair)?;
     let Some(item) = table.get_mut(key) else {
         table.insert(key, toml_edit::value(delta));
         return Ok(());
@@ -80,9 +97,7 @@ pub fn add_slope(
         .split_once('.')
         .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
     let mid = 0.5 * (lo + hi);
-    let table = doc["pairs"][pair]
-        .as_table_like_mut()
-        .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
+    let table = table_mut(doc, pair)?;
     let current = table.get(key).and_then(|i| i.as_value().cloned());
     let base = match &current {
         None => Some(0.0),
@@ -225,11 +240,17 @@ pub fn values_of(doc: &toml_edit::DocumentMut, path: &str) -> Result<Vec<f64>> {
     let (pair, key) = path
         .split_once('.')
         .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
-    let table = doc
-        .get("pairs")
-        .and_then(|p| p.get(pair))
-        .and_then(|t| t.as_table_like())
-        .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?;
+    let table = if pair == "particles" {
+        match doc.get("particles").and_then(|t| t.as_table_like()) {
+            Some(t) => t,
+            None => return Ok(vec![0.0]),
+        }
+    } else {
+        doc.get("pairs")
+            .and_then(|p| p.get(pair))
+            .and_then(|t| t.as_table_like())
+            .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?
+    };
     let Some(v) = table.get(key).and_then(|i| i.as_value()) else {
         return Ok(vec![0.0]);
     };
@@ -259,6 +280,20 @@ mod tests {
         "[pairs.soil-soil]\nfriction = 0.8\nrolling = { interpolate = \"moisture_pct\", x = [3, 6, 12], y = [0.1, 0.2, 0.4] }\npoly = { polynomial = \"moisture_pct\", coefficients = [1.0, 2.0] }\n"
             .parse()
             .unwrap()
+    }
+
+    #[test]
+    fn particles_keys_go_to_the_particles_table() {
+        let mut d = doc();
+        assert_eq!(values_of(&d, "particles.fine_fraction").unwrap(), vec![0.0]);
+        add_to(&mut d, "particles.fine_fraction", 0.1).unwrap();
+        add_to(&mut d, "particles.fine_fraction", 0.05).unwrap();
+        assert_eq!(d["particles"]["fine_fraction"].as_float(), Some(0.1 + 0.05));
+        assert_eq!(
+            values_of(&d, "particles.fine_fraction").unwrap(),
+            vec![0.1 + 0.05]
+        );
+        assert!(d["pairs"].get("particles").is_none());
     }
 
     fn value(d: &toml_edit::DocumentMut, key: &str) -> String {

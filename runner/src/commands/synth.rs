@@ -312,7 +312,7 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
         "wrote {} synthetic measurements to {} (truth runs in {})",
         rows.len(),
         args.out.display(),
-        work.display()
+        args.cache.as_ref().unwrap_or(&work).display()
     )?;
     Ok(())
 }

@@ -9,5 +9,6 @@ pub mod model;
 pub mod protocol;
 pub mod repose;
 pub mod shear;
+pub mod sizes;
 pub mod specimen;
 pub mod ucs;

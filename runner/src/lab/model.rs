@@ -49,6 +49,22 @@ pub struct ModelFile {
     /// Effects the model lacks, for `tilth diagnose`; the lab ignores them.
     #[serde(default)]
     pub candidates: BTreeMap<String, CandidateModel>,
+    /// The soil's size mix beyond the test's one diameter ([`super::sizes::SizeMix`]).
+    pub particles: Option<ParticlesModel>,
+}
+
+/// `[particles]`: a fine fraction beside the test's particle diameter.
+///
+/// ```toml
+/// [particles]
+/// fine_fraction = 0.1          # mass fraction, [0, 0.5]; a value form (may follow a condition)
+/// fine_diameter_ratio = 0.5    # fine diameter / the test's diameter, [0.3, 1)
+/// ```
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesModel {
+    pub fine_fraction: Option<Value>,
+    pub fine_diameter_ratio: Option<f64>,
 }
 
 /// `[candidates.NAME]`: a physical effect the model might be missing, with a strength

@@ -10,6 +10,7 @@
 use super::discharge::Discharge;
 use super::experiment::{Built, Common, rayleigh_time, scene::*, soil_density};
 use super::protocol::{Control, Protocol};
+use super::sizes::SizeMix;
 use crate::sweep::observe::{self, Tray};
 use anyhow::{Result, bail};
 use serde::Deserialize;
@@ -145,13 +146,14 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
         bail!("repose.funnel_inlet_diameter must be larger than funnel_outlet_diameter");
     }
     let rho = soil_density(c.model)?;
-    let count = (mass * 1e-3 / (rho * std::f64::consts::PI * d.powi(3) / 6.0)).round() as i64;
+    let mix = SizeMix::of(c.model, c.conditions, d)?;
+    let count = mix.count(mass * 1e-3 / rho);
     if count < 1 {
         bail!("repose.mass_g = {mass} g is less than one particle");
     }
     let dt = match c.sim.dt {
         Some(dt) => dt,
-        None => c.sim.dt_fraction * rayleigh_time(c.model, d)?,
+        None => c.sim.dt_fraction * rayleigh_time(c.model, mix.min_diameter())?,
     };
     let (materials, contact, pairs) = c.model.scene_parts(c.conditions, false)?;
     let tray_r = 0.5 * p.tray_diameter;
@@ -249,10 +251,8 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
                 ("count", Value::Integer(count)),
                 ("rate", f(p.rate)),
                 ("velocity", v3([0.0, 0.0, -0.2])),
-                (
-                    "sizes",
-                    Value::Array(vec![t(&[("diameter", f(d)), ("fraction", f(1.0))])]),
-                ),
+                ("basis", s("mass")),
+                ("sizes", mix.sizes()),
             ])]),
         ),
     ]);
@@ -306,15 +306,15 @@ pub struct ReposeProtocol {
 const DISCHARGE_SAMPLE: f64 = 1e-3;
 
 impl ReposeProtocol {
-    /// The fraction of the poured particles below the outlet.
+    /// The fraction of the poured mass below the outlet (by mass: with a fine fraction a
+    /// count would weigh a fine grain as much as a coarse one).
     fn passed(&self, sim: &Simulation) -> f64 {
-        let below = sim
-            .particles
-            .position
-            .iter()
-            .filter(|x| x.z < self.z_out)
-            .count();
-        below as f64 / self.count as f64
+        let p = &sim.particles;
+        let below: f64 = (0..p.len())
+            .filter(|&k| p.position[k].z < self.z_out)
+            .map(|k| p.mass[k])
+            .sum();
+        below * 1e3 / self.mass_g
     }
 
     fn at_rest(&self, sim: &Simulation) -> bool {
@@ -496,7 +496,7 @@ impl Protocol for ReposeProtocol {
             "heap_cone_angle_deg": h.cone_angle_deg,
             "heap_height_m": h.height_m,
             "particles_on_tray": h.particles_on_tray,
-            "tray_mass_g": self.mass_g * h.particles_on_tray as f64 / self.count as f64,
+            "tray_mass_g": h.mass_on_tray_kg * 1e3,
             "funnel_flow_rate_g_s": self.discharge.rate_g_per_s(self.mass_g),
             "particles": sim.particles.len(),
             "particles_left_in_funnel": sim.particles.position.iter().filter(|x| x.z > self.z_out).count(),

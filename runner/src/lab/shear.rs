@@ -100,6 +100,7 @@ const UPPER_FLANGE: usize = 5;
 
 pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
+    let mix = super::sizes::SizeMix::of(c.model, c.conditions, d)?;
     specimen::check_fit("direct_shear", p.box_diameter, p.height, d)?;
     specimen::check_positive(
         "direct_shear",
@@ -139,7 +140,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         );
     }
     let r = 0.5 * p.box_diameter;
-    let (dt, count) = specimen::particles_for(c, d, area * p.height, p.packing)?;
+    let (dt, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
     let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
     // Loose particles need about twice the specimen's height; the platen starts above that.
     let z_mid = 0.5 * p.height;
@@ -169,7 +170,13 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         ),
         (
             "factories",
-            Value::Array(vec![specimen::fill(count, d, r - 0.6 * d, 0.6 * d, z_fill)]),
+            Value::Array(vec![specimen::fill(
+                count,
+                &mix,
+                r - 0.6 * d,
+                0.6 * d,
+                z_fill,
+            )]),
         ),
     ]);
     Ok(Built {

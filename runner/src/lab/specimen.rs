@@ -2,6 +2,7 @@
 //! compacting with a servo platen, forming bonds, and the inertial number.
 
 use super::experiment::{Common, rayleigh_time, scene::*};
+use super::sizes::SizeMix;
 use anyhow::{Result, bail};
 use tilth_kernel::DVec3;
 use tilth_kernel::sim::Simulation;
@@ -92,7 +93,8 @@ pub const BOND_DT_FRACTION: f64 = 0.08;
 /// The time step and particle count for a specimen of `volume` (m^3) at `packing`: the
 /// smaller of `dt_fraction` of the Rayleigh time and [`BOND_DT_FRACTION`] of the stiffest
 /// bond's time scale, unless `[simulation] dt` is given.
-pub fn particles_for(c: &Common, d: f64, volume: f64, packing: f64) -> Result<(f64, i64)> {
+pub fn particles_for(c: &Common, mix: &SizeMix, volume: f64, packing: f64) -> Result<(f64, i64)> {
+    let d = mix.min_diameter();
     let dt = match c.sim.dt {
         Some(dt) => dt,
         None => {
@@ -100,8 +102,7 @@ pub fn particles_for(c: &Common, d: f64, volume: f64, packing: f64) -> Result<(f
             rayleigh.min(bond_time_scale(c, d)? * BOND_DT_FRACTION)
         }
     };
-    let count = (packing * volume / (std::f64::consts::PI * d.powi(3) / 6.0)).round() as i64;
-    Ok((dt, count))
+    Ok((dt, mix.count(packing * volume)))
 }
 
 /// Refuses any of `values` that is not a finite number above 0 (`section.key` in messages).
@@ -189,8 +190,9 @@ pub fn ring(name: &str, z0: f64, z1: f64, radius: f64) -> Value {
     ])
 }
 
-/// A factory filling a cylinder of `radius` between `z0` and `z1` with `count` particles.
-pub fn fill(count: i64, d: f64, radius: f64, z0: f64, z1: f64) -> Value {
+/// A factory filling a cylinder of `radius` between `z0` and `z1` with `count` particles of
+/// the size mix `mix`.
+pub fn fill(count: i64, mix: &SizeMix, radius: f64, z0: f64, z1: f64) -> Value {
     t(&[
         (
             "region",
@@ -204,10 +206,8 @@ pub fn fill(count: i64, d: f64, radius: f64, z0: f64, z1: f64) -> Value {
         ("material", s("soil")),
         ("count", Value::Integer(count)),
         ("rate", f(2.0e5)),
-        (
-            "sizes",
-            Value::Array(vec![t(&[("diameter", f(d)), ("fraction", f(1.0))])]),
-        ),
+        ("basis", s("mass")),
+        ("sizes", mix.sizes()),
     ])
 }
 

@@ -94,6 +94,7 @@ const PLATEN: usize = 2;
 
 pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
+    let mix = super::sizes::SizeMix::of(c.model, c.conditions, d)?;
     specimen::check_fit("ucs", p.mould_diameter, p.height, d)?;
     specimen::check_positive(
         "ucs",
@@ -134,7 +135,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     }
     let r = 0.5 * p.mould_diameter;
     let area = std::f64::consts::PI * r * r;
-    let (dt, count) = specimen::particles_for(c, d, area * p.height, p.packing)?;
+    let (dt, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
     let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
     let z_fill = 2.4 * p.height / (p.packing / 0.55);
     let z_top = z_fill + 2.0 * d;
@@ -164,7 +165,13 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
         ),
         (
             "factories",
-            Value::Array(vec![specimen::fill(count, d, r - 0.6 * d, 0.6 * d, z_fill)]),
+            Value::Array(vec![specimen::fill(
+                count,
+                &mix,
+                r - 0.6 * d,
+                0.6 * d,
+                z_fill,
+            )]),
         ),
     ]);
     Ok(Built {

@@ -25,6 +25,8 @@ pub struct Heap {
     pub height_m: f64,
     /// Particles above the tray's face.
     pub particles_on_tray: usize,
+    /// Their mass, kg.
+    pub mass_on_tray_kg: f64,
     /// atan(height / tray radius), degrees.
     pub cone_angle_deg: f64,
 }
@@ -54,6 +56,7 @@ pub fn heap(sim: &Simulation, tray: Tray) -> Heap {
     let [cx, cy, cz] = tray.centre;
     let mut top: f64 = 0.0;
     let mut n = 0;
+    let mut mass = 0.0;
     for k in 0..p.len() {
         let x = p.position[k];
         let r = p.radius[k];
@@ -62,11 +65,13 @@ pub fn heap(sim: &Simulation, tray: Tray) -> Heap {
         if inside && x.z > cz && x.z < tray.ceiling && p.velocity[k].length() < 0.05 {
             top = top.max(x.z + r - cz);
             n += 1;
+            mass += p.mass[k];
         }
     }
     Heap {
         height_m: top,
         particles_on_tray: n,
+        mass_on_tray_kg: mass,
         cone_angle_deg: (top / tray.radius).atan().to_degrees(),
     }
 }

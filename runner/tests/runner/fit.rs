@@ -27,7 +27,7 @@ fn bad_parameters_are_refused_before_any_run() {
     std::fs::write(&data, DATA).unwrap();
     for (param, expect) in [
         ("soil-soil.rolling_friction=0.2:0.45", "outside [0.2, 0.45]"),
-        ("candidate.fines=0:1", "has no [candidates.fines]"),
+        ("candidate.clumps=0:1", "has no [candidates.clumps]"),
         ("candidate.twisting=0:1@2", "the start 2 is outside [0, 1]"),
         ("soil-soil.rolling_friction=0.4:0.1", "LOW < HIGH"),
         ("rolling_friction=0:1", "expected PAIR.KEY=LOW:HIGH"),

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# The discovery loop's false-alarm rate (docs/discovery.md, "No hidden effect"): data made by
+# the model itself (truth = model + noise) for SEEDS seeds, each diagnosed; counts the seeds
+# in which some candidate is called significant. The model's runs are the same for every
+# seed and come from one cache (--cache), so each seed costs only its truth runs.
+#
+#   tools/discovery/null_study.sh OUT [SEEDS]
+#   tools/discovery/null_study.sh runs/null 20
+#
+# Environment: TILTH (default target/release/tilth), MODEL (default models/li2022.toml), R
+# (replicates, default 4), NOISE, FREE, CACHE (default OUT/cache)
+# (as in hidden_effect.sh).
+set -euo pipefail
+out=$1 seeds=${2:-20}
+tilth=${TILTH:-target/release/tilth}
+R=${R:-4}
+NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%}
+FREE=${FREE:-soil-soil.rolling_friction=0.05:0.45}
+model=${MODEL:-models/li2022.toml}
+cache=${CACHE:-$out/cache}
+mkdir -p "$out"
+{
+  echo "test,moisture_pct,observable"
+  for m in 3 6 9 12; do
+    for o in heap_cone_angle_deg tray_mass_g funnel_flow_rate_g_s; do echo "repose,$m,$o"; done
+  done
+} > "$out/conditions.csv"
+for s in $(seq 1 "$seeds"); do
+  "$tilth" synth --truth "$model" --conditions "$out/conditions.csv" --noise "$NOISE" \
+    --replicates "$R" --seed "$s" --out "$out/seed-$s/data.csv" --coarse --quiet --cache "$cache"
+  "$tilth" diagnose --model "$model" --data "$out/seed-$s/data.csv" --out "$out/seed-$s/diagnose" \
+    --param "$FREE" --replicates "$R" --coarse --quiet --cache "$cache" > /dev/null
+done
+python3 - "$out" "$seeds" <<'PY'
+import json, sys
+out, seeds = sys.argv[1], int(sys.argv[2])
+flagged = 0
+print("seed  first candidate  statistic  p (Holm)  significant")
+for s in range(1, seeds + 1):
+    c = json.load(open(f"{out}/seed-{s}/diagnose/diagnosis.json"))["candidates"]
+    hit = [x["name"] for x in c if x["significant"]]
+    flagged += bool(hit)
+    print(f"{s:4d}  {c[0]['name']:<16} {c[0]['statistic']:9.2f}  {c[0]['p_value']:8.3g}  {', '.join(hit) or '-'}")
+print(f"seeds with a significant candidate: {flagged} of {seeds}")
+PY
