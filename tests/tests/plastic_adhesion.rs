@@ -22,7 +22,7 @@ fn pull_off_is_lambda_times_the_largest_hertz_load() {
     let m = model(&spec, &[("plastic_adhesion", LAMBDA)]);
     let mut h = vec![0.0; m.history_stride()];
     // Net repulsive normal force on the pair (force on i is -n F, n = +x).
-    let mut f = |delta: f64, h: &mut Vec<f64>| {
+    let f = |delta: f64, h: &mut Vec<f64>| {
         m.evaluate(0, 0, &contact_at(delta, DVec3::ZERO, 1e-6), h)
             .map_or(0.0, |o| -o.force.x)
     };

@@ -216,14 +216,16 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
                     ("length", f(z_tray)),
                     ("material", s("steel")),
                 ]),
-                // Keeps what rolls off the tray on the floor.
+                // Keeps what rolls off the tray on the floor, and the rare grain thrown out
+                // of the stream (seen with a fine fraction) inside the domain, as high as it
+                // goes.
                 t(&[
                     ("name", s("fence")),
                     ("type", s("cylinder")),
                     ("base", v3([0.0, 0.0, 0.0])),
                     ("axis", v3([0.0, 0.0, 1.0])),
                     ("radius", f(half - 0.02)),
-                    ("length", f(0.05)),
+                    ("length", f(z_top + 0.04)),
                     ("material", s("steel")),
                 ]),
                 t(&[

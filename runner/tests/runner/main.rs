@@ -4,6 +4,7 @@ mod cache;
 mod calibrate;
 mod config_files;
 mod diagnose;
+mod discovery_proof;
 mod end_to_end;
 mod experiments;
 mod external;
