@@ -7,32 +7,37 @@
 #   tools/discovery/hidden_effect.sh EFFECT STRENGTH OUT [SEED]
 #   tools/discovery/hidden_effect.sh plastic_adhesion 0.05 runs/hidden-plastic
 #
+# The data: the funnel test at 3, 6, 9 and 12 % moisture, four readings each (fixed-base
+# cone angle, tray mass, flow rate, soil left in the funnel).
+#
 # Environment: TILTH (the binary; default target/release/tilth), MODEL (default
-# models/li2022.toml), R (replicates per run setting, default 4), NOISE (default below), FREE
-# (the model's free parameter), CACHE (the run cache, default OUT/cache: give several
-# studies of one model the same cache and they share the model's runs).
+# models/li2022.toml), SCALE (default --coarse; empty: the study's scale), R (replicates per
+# run setting, default 4), NOISE (default below), FREE (the model's free parameter), CACHE
+# (the run cache, default OUT/cache: give several studies of one model the same cache and
+# they share the model's runs).
 set -euo pipefail
 effect=$1 strength=$2 out=$3 seed=${4:-1}
 tilth=${TILTH:-target/release/tilth}
 R=${R:-4}
-NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%}
+NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%,funnel_residue_g=0.05}
 FREE=${FREE:-soil-soil.rolling_friction=0.05:0.45}
 model=${MODEL:-models/li2022.toml}
+SCALE=${SCALE---coarse}   # SCALE= (empty) runs at the study's scale
 cache=${CACHE:-$out/cache}
 mkdir -p "$out"
 {
   echo "test,moisture_pct,observable"
   for m in 3 6 9 12; do
-    for o in heap_cone_angle_deg tray_mass_g funnel_flow_rate_g_s; do echo "repose,$m,$o"; done
+    for o in heap_cone_angle_deg tray_mass_g funnel_flow_rate_g_s funnel_residue_g; do echo "repose,$m,$o"; done
   done
 } > "$out/conditions.csv"
 
 "$tilth" synth --truth "$model" --with "$effect=$strength" --conditions "$out/conditions.csv" \
-  --noise "$NOISE" --replicates "$R" --seed "$seed" --out "$out/data.csv" --coarse --quiet --cache "$cache"
+  --noise "$NOISE" --replicates "$R" --seed "$seed" --out "$out/data.csv" $SCALE --quiet --cache "$cache"
 "$tilth" compare --model "$model" --data "$out/data.csv" --out "$out/1-compare" \
-  --replicates "$R" --coarse --quiet --cache "$cache" > /dev/null
+  --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
 "$tilth" diagnose --model "$model" --data "$out/data.csv" --out "$out/2-diagnose" \
-  --param "$FREE" --replicates "$R" --coarse --quiet --cache "$cache" > /dev/null
+  --param "$FREE" --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
 # The first candidate's strength, free in [0, max(3 x its estimate, 2 x its step)] from the
 # estimate: what a user knows after the diagnosis (the hidden strength is not used).
 top=$(python3 - "$out/2-diagnose/diagnosis.json" "$model" <<'PY'
@@ -47,9 +52,9 @@ read -r name est hi significant <<< "$top"
 echo "diagnose: first $name (strength $est, significant: $significant); hidden: $effect"
 "$tilth" fit --model "$model" --data "$out/data.csv" --out "$out/3-fit" \
   --param "$FREE" --param "candidate.$name=0:$hi@$est" \
-  --replicates "$R" --iterations 3 --coarse --quiet --cache "$cache" > /dev/null
+  --replicates "$R" --iterations 3 $SCALE --quiet --cache "$cache" > /dev/null
 "$tilth" compare --model "$out/3-fit/model.toml" --data "$out/data.csv" --out "$out/4-compare" \
-  --replicates "$R" --coarse --quiet --cache "$cache" > /dev/null
+  --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
 "$tilth" report "$out" > /dev/null
 python3 - "$out" <<'PY'
 import json, sys, math

@@ -22,14 +22,16 @@ use std::path::Path;
 ///
 /// A repose run also gives the funnel test's other readings: the angle of the heap on the
 /// fixed base (atan(H / R), H the heap's height over the tray of radius R: the fixed-base
-/// cone method, USP <1174>), the mass the tray holds, and the funnel's mass flow rate
-/// (`lab::discharge`: the Hall-flowmeter reading). They respond to different physics: the
-/// flow rate to wall friction and cohesion much more than to rolling resistance.
-pub const OBSERVABLES: [(&str, &str, &str); 6] = [
+/// cone method, USP <1174>), the mass the tray holds, the funnel's mass flow rate
+/// (`lab::discharge`: the Hall-flowmeter reading) and the soil left in the funnel (weighed
+/// after the test). They respond to different physics: the flow rate to wall friction and
+/// cohesion much more than to rolling resistance, the residue to adhesion to the steel.
+pub const OBSERVABLES: [(&str, &str, &str); 7] = [
     ("repose", "repose_angle_deg", "deg"),
     ("repose", "heap_cone_angle_deg", "deg"),
     ("repose", "tray_mass_g", "g"),
     ("repose", "funnel_flow_rate_g_s", "g/s"),
+    ("repose", "funnel_residue_g", "g"),
     ("direct_shear", "peak_shear_force_n", "N"),
     ("ucs", "ucs_kpa", "kPa"),
 ];

@@ -319,6 +319,17 @@ impl ReposeProtocol {
         below * 1e3 / self.mass_g
     }
 
+    /// The soil left in the funnel (above its outlet), g: what sticks to the funnel's wall
+    /// or arches over its outlet, as a lab weighs the funnel after the test.
+    fn residue_g(&self, sim: &Simulation) -> f64 {
+        let p = &sim.particles;
+        (0..p.len())
+            .filter(|&k| p.position[k].z > self.z_out)
+            .map(|k| p.mass[k])
+            .sum::<f64>()
+            * 1e3
+    }
+
     fn at_rest(&self, sim: &Simulation) -> bool {
         let p = &sim.particles;
         if p.len() < self.count || sim.time < self.fill_time {
@@ -502,6 +513,7 @@ impl Protocol for ReposeProtocol {
             "funnel_flow_rate_g_s": self.discharge.rate_g_per_s(self.mass_g),
             "particles": sim.particles.len(),
             "particles_left_in_funnel": sim.particles.position.iter().filter(|x| x.z > self.z_out).count(),
+            "funnel_residue_g": self.residue_g(sim),
             "heap_reached_outlet": self.reached_outlet(sim),
             "warning": if self.settled_at.is_none() {
                 Some(format!("the heap was not at rest at max_time = {} s; raise repose.max_time", self.p.max_time))
