@@ -10,7 +10,7 @@
 //!   significant.
 //!
 //! Both share one run cache, so the model's own runs (compare, the diagnosis's finite
-//! differences) are made once. About 25 minutes on 2 cores.
+//! differences) are made once. About 30 minutes on 2 cores.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -74,7 +74,6 @@ fn json(path: &Path) -> serde_json::Value {
 }
 
 #[test]
-#[ignore = "about 20 minutes; being verified"]
 fn hidden_effects_are_ranked_first_and_fitting_them_brings_the_error_to_the_noise() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let mut failures = vec![];
@@ -124,7 +123,6 @@ fn hidden_effects_are_ranked_first_and_fitting_them_brings_the_error_to_the_nois
 }
 
 #[test]
-#[ignore = "about 10 minutes; being verified"]
 fn without_a_hidden_effect_no_candidate_is_significant_in_19_of_20_seeds() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let out = scratch().join("null");
