@@ -11,20 +11,7 @@
 # OUT/cache).
 set -euo pipefail
 out=$1 seeds=${2:-20}
-tilth=${TILTH:-target/release/tilth}
-R=${R:-4}
-NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%,funnel_residue_g=0.05}
-FREE=${FREE:-soil-soil.rolling_friction=0.05:0.45}
-model=${MODEL:-models/li2022.toml}
-SCALE=${SCALE---coarse}   # SCALE= (empty) runs at the study's scale
-cache=${CACHE:-$out/cache}
-mkdir -p "$out"
-{
-  echo "test,moisture_pct,observable"
-  for m in 3 6 9 12; do
-    for o in heap_cone_angle_deg tray_mass_g funnel_flow_rate_g_s funnel_residue_g; do echo "repose,$m,$o"; done
-  done
-} > "$out/conditions.csv"
+source "$(dirname "$0")/setup.sh"
 for s in $(seq 1 "$seeds"); do
   "$tilth" synth --truth "$model" --conditions "$out/conditions.csv" --noise "$NOISE" \
     --replicates "$R" --seed "$s" --out "$out/seed-$s/data.csv" $SCALE --quiet --cache "$cache"

@@ -1,0 +1,17 @@
+# The set-up both discovery scripts share (sourced with OUT in $out): the defaults of their
+# environment and the measured conditions, the funnel test at 3, 6, 9 and 12 % moisture with
+# four readings each, written to OUT/conditions.csv.
+tilth=${TILTH:-target/release/tilth}
+R=${R:-4}
+NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%,funnel_residue_g=0.05}
+FREE=${FREE:-soil-soil.rolling_friction=0.05:0.45}
+model=${MODEL:-models/li2022.toml}
+SCALE=${SCALE---coarse}   # SCALE= (empty) runs at the study's scale
+cache=${CACHE:-$out/cache}
+mkdir -p "$out"
+{
+  echo "test,moisture_pct,observable"
+  for m in 3 6 9 12; do
+    for o in heap_cone_angle_deg tray_mass_g funnel_flow_rate_g_s funnel_residue_g; do echo "repose,$m,$o"; done
+  done
+} > "$out/conditions.csv"
