@@ -103,9 +103,17 @@ pub trait ExtraLaw: Send + Sync {
     ) -> (DVec3, DVec3) {
         (DVec3::ZERO, DVec3::ZERO)
     }
-    /// How far beyond touching (m, >= 0) the effect acts for contact radius `r_eff`.
+    /// How far beyond touching (m, >= 0) the effect acts for contact radius `r_eff`. The
+    /// neighbour list asks it with the largest particle radius, so it must bound the reach
+    /// of every contact of particles up to that radius.
     fn reach(&self, _r_eff: f64) -> f64 {
         0.0
+    }
+    /// How far beyond touching (m, >= 0) the effect acts for this contact; the pipeline ends
+    /// an established contact past it. Override it when the reach depends on more than R*
+    /// (a bridge whose volume comes from the grains' masses).
+    fn reach_between(&self, c: &Contact) -> f64 {
+        self.reach(c.r_eff)
     }
 }
 

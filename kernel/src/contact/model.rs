@@ -511,7 +511,7 @@ impl ContactModel {
                 return None;
             }
             history[ACTIVE] = 1.0;
-        } else if c.overlap <= 0.0 && c.overlap <= -self.reach_of(laws, c.r_eff) {
+        } else if c.overlap <= 0.0 && c.overlap <= -self.reach_of(laws, c) {
             history[..self.layout.contact_len].fill(0.0);
             return None;
         }
@@ -566,13 +566,13 @@ impl ContactModel {
     }
 
     #[inline]
-    fn reach_of(&self, laws: &PairLaws, r_eff: f64) -> f64 {
+    fn reach_of(&self, laws: &PairLaws, c: &Contact) -> f64 {
         if !self.has_reach && laws.extras.is_empty() {
             return 0.0;
         }
-        let mut r = laws.normal.reach(r_eff);
+        let mut r = laws.normal.reach(c.r_eff);
         for x in &laws.extras {
-            r = r.max(x.reach(r_eff));
+            r = r.max(x.reach_between(c));
         }
         r
     }

@@ -22,6 +22,7 @@ registry! {
     cdt,
     epsd,
     capillary,
+    capillary_moisture,
     twisting,
     plastic_adhesion,
     bond,
