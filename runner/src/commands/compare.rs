@@ -51,8 +51,8 @@ pub struct CompareArgs {
     #[arg(long)]
     pub quiet: bool,
     /// Keep the runs in this directory, keyed by the model file's content, the test, the
-    /// conditions and the seeds, and reuse any run already there, whichever command made it
-    /// (one command at a time per cache).
+    /// conditions, the seeds and this build of tilth, and reuse any run already there,
+    /// whichever command made it (one command at a time per cache).
     #[arg(long)]
     pub cache: Option<PathBuf>,
 }
@@ -151,7 +151,8 @@ pub struct Simulate<'a> {
     pub cores: Option<usize>,
     pub quiet: bool,
     /// A run cache shared between commands: runs go to `cache/<test>-<key>/`, the key made of
-    /// the model file's content, the test, the conditions and the seeds, so that any command
+    /// the model file's content, the test, the conditions, the seeds and the build of tilth
+    /// (a hash of its executable), so that any command
     /// that needs the same runs finds them done (`--cache`).
     pub cache: Option<&'a Path>,
 }
@@ -217,7 +218,10 @@ pub fn simulate(
         let plan = Plan::generated(test, text, Path::new("."), factors, runs)
             .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
         let dir = match how.cache {
-            Some(cache) => cache.join(format!("{test}-{}", plan.fingerprint)),
+            Some(cache) => cache.join(format!(
+                "{test}-{}",
+                fnv1a(&[&plan.fingerprint, build_id()?])
+            )),
             None => how.out.join(test),
         };
         plans.push((test.to_string(), plan, dir));
@@ -263,6 +267,21 @@ pub fn observed(s: &RunSummary, observable: &str) -> Option<f64> {
 }
 
 /// Runs (or resumes) a generated plan into `dir`, pinned, with a progress bar unless `quiet`.
+/// This build of tilth, as a hash of the running executable: a run cache must not hand the
+/// runs of one build's physics to another (a rebuilt tilth starts afresh).
+fn build_id() -> Result<&'static str> {
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    if let Some(id) = ID.get() {
+        return Ok(id);
+    }
+    let exe = std::env::current_exe().context("cannot locate the tilth executable")?;
+    let bytes = std::fs::read(&exe).with_context(|| format!("{}: cannot read", exe.display()))?;
+    let mut h = std::hash::DefaultHasher::new();
+    std::hash::Hasher::write(&mut h, &bytes);
+    let id = format!("{:016x}", std::hash::Hasher::finish(&h));
+    Ok(ID.get_or_init(|| id))
+}
+
 /// The model file's copy in the cache, named by its content, so that the runs' fingerprint
 /// (which holds the model's path) is the same for every copy of the same model.
 fn cached_model(model: &Path, cache: &Path) -> Result<PathBuf> {
