@@ -326,7 +326,8 @@ impl ReposeProtocol {
         (0..p.len())
             .filter(|&k| p.position[k].z > self.z_out)
             .map(|k| p.mass[k])
-            .sum::<f64>()
+            // A fold from +0: f64's `sum` of nothing is -0, which an empty funnel printed.
+            .fold(0.0, |total, m| total + m)
             * 1e3
     }
 
