@@ -19,12 +19,27 @@ pub struct PairList {
     /// Pairs of particle p as second member: `rev_pair[rev_start[p]..rev_start[p + 1]]`, ascending.
     pub rev_start: Vec<u32>,
     pub rev_pair: Vec<u32>,
+    /// The buffers of the list before this one, refilled by the next rebuild: two lists'
+    /// worth of memory at most, and no new allocation (or heap fragmentation) once the
+    /// count of pairs stops growing.
+    spare: Buffers,
 }
 
+/// The vectors of a list, without meaning between rebuilds.
+#[derive(Debug, Clone, Default)]
+struct Buffers {
+    i: Vec<u32>,
+    j: Vec<u32>,
+    row_start: Vec<u32>,
+    history: Vec<f64>,
+    rev_start: Vec<u32>,
+    rev_pair: Vec<u32>,
+}
+
+/// One task's rows of a new list: partner counts per row and the partners, row after row.
 struct RowChunk {
     counts: Vec<u32>,
     j: Vec<u32>,
-    history: Vec<f64>,
 }
 
 impl PairList {
@@ -82,8 +97,12 @@ impl PairList {
         });
         let r_max = radius.iter().copied().fold(0.0, f64::max);
         let grid = CellGrid::build(position, 2.0 * r_max + extra);
+        let b = std::mem::take(&mut self.spare);
         let old = &*self;
         let stride = self.stride;
+        // Two passes, so that a rebuild holds only the old list and the new one: first the
+        // partners of every row (4 bytes a pair), then, with the rows' places known, each
+        // task copies the carried history straight into its part of the new list.
         let chunks: Vec<RowChunk> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
@@ -91,7 +110,6 @@ impl PairList {
                 let mut out = RowChunk {
                     counts: Vec::with_capacity(rows.len()),
                     j: vec![],
-                    history: vec![],
                 };
                 let mut near = Vec::with_capacity(64);
                 for i in rows {
@@ -106,16 +124,8 @@ impl PairList {
                             }
                         }
                     });
-                    // Carry history from the old row of the same particle. Without a reorder
-                    // both rows ascend in j and merge; after one, look each partner up.
-                    let oi = old_of_new.map_or(i, |m| m[i] as usize);
-                    let old_row = if oi + 1 < old.row_start.len() {
-                        old.row_start[oi] as usize..old.row_start[oi + 1] as usize
-                    } else {
-                        0..0
-                    };
                     if let Some(keep) = keep {
-                        for q in old_row.clone() {
+                        for q in old.row_of(old_of_new.map_or(i, |m| m[i] as usize)) {
                             if keep(&old.history[q * stride..(q + 1) * stride]) {
                                 let j = match &new_of_old {
                                     None => old.j[q],
@@ -130,27 +140,6 @@ impl PairList {
                         near.sort_unstable();
                     }
                     out.counts.push(near.len() as u32);
-                    let mut k = old_row.start;
-                    for &j in &near {
-                        let found = match old_of_new {
-                            None => {
-                                while k < old_row.end && old.j[k] < j {
-                                    k += 1;
-                                }
-                                (k < old_row.end && old.j[k] == j).then_some(k)
-                            }
-                            Some(m) => {
-                                let oj = m[j as usize];
-                                old_row.clone().find(|&q| old.j[q] == oj)
-                            }
-                        };
-                        match found {
-                            Some(q) => out
-                                .history
-                                .extend_from_slice(&old.history[q * stride..(q + 1) * stride]),
-                            None => out.history.extend(std::iter::repeat_n(0.0, stride)),
-                        }
-                    }
                     out.j.extend_from_slice(&near);
                 }
                 out
@@ -158,14 +147,26 @@ impl PairList {
             .collect();
 
         let total: usize = chunks.iter().map(|c| c.j.len()).sum();
+        // Refill the spare buffers; new pairs start from a zero history.
+        let mut b = b;
+        room(&mut b.i, total);
+        room(&mut b.j, total);
+        room(&mut b.row_start, n + 1);
+        room(&mut b.history, total * stride);
+        b.history.resize(total * stride, 0.0);
+        room(&mut b.rev_start, n + 1);
+        b.rev_start.resize(n + 1, 0);
+        room(&mut b.rev_pair, total);
+        b.rev_pair.resize(total, 0);
         let mut list = PairList {
-            i: Vec::with_capacity(total),
-            j: Vec::with_capacity(total),
-            row_start: Vec::with_capacity(n + 1),
-            history: Vec::with_capacity(total * stride),
+            i: b.i,
+            j: b.j,
+            row_start: b.row_start,
+            history: b.history,
             stride,
-            rev_start: vec![0; n + 1],
-            rev_pair: vec![0; total],
+            rev_start: b.rev_start,
+            rev_pair: b.rev_pair,
+            spare: Buffers::default(),
         };
         list.row_start.push(0);
         let mut row = 0u32;
@@ -177,8 +178,47 @@ impl PairList {
                 row += 1;
             }
             list.j.extend_from_slice(&c.j);
-            list.history.extend_from_slice(&c.history);
         }
+
+        // Carry history from the old row of the same particle. Without a reorder both rows
+        // ascend in j and merge; after one, look each partner up.
+        let mut tasks = Vec::with_capacity(n.div_ceil(CHUNK));
+        let mut rest = &mut list.history[..];
+        for c in 0..n.div_ceil(CHUNK) {
+            let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
+            let len = (list.row_start[rows.end] - list.row_start[rows.start]) as usize;
+            let (mine, tail) = rest.split_at_mut(len * stride);
+            tasks.push((rows, mine));
+            rest = tail;
+        }
+        let (new_j, new_start) = (&list.j, &list.row_start);
+        tasks.into_par_iter().for_each(|(rows, hist)| {
+            let base = new_start[rows.start] as usize;
+            for i in rows {
+                let old_row = old.row_of(old_of_new.map_or(i, |m| m[i] as usize));
+                let mut k = old_row.start;
+                for p in new_start[i] as usize..new_start[i + 1] as usize {
+                    let j = new_j[p];
+                    let found = match old_of_new {
+                        None => {
+                            while k < old_row.end && old.j[k] < j {
+                                k += 1;
+                            }
+                            (k < old_row.end && old.j[k] == j).then_some(k)
+                        }
+                        Some(m) => {
+                            let oj = m[j as usize];
+                            old_row.clone().find(|&q| old.j[q] == oj)
+                        }
+                    };
+                    if let Some(q) = found {
+                        hist[(p - base) * stride..(p - base + 1) * stride]
+                            .copy_from_slice(&old.history[q * stride..(q + 1) * stride]);
+                    }
+                }
+            }
+        });
+
         for &j in &list.j {
             list.rev_start[j as usize + 1] += 1;
         }
@@ -190,11 +230,52 @@ impl PairList {
             list.rev_pair[fill[j as usize] as usize] = k as u32;
             fill[j as usize] += 1;
         }
-        *self = list;
+        let old = std::mem::replace(self, list);
+        self.spare = Buffers {
+            i: old.i,
+            j: old.j,
+            row_start: old.row_start,
+            history: old.history,
+            rev_start: old.rev_start,
+            rev_pair: old.rev_pair,
+        };
+    }
+
+    /// The pairs in the row of particle `p` (as it was numbered when this list was built);
+    /// empty for a particle the list has not seen.
+    fn row_of(&self, p: usize) -> std::ops::Range<usize> {
+        if p + 1 < self.row_start.len() {
+            self.row_start[p] as usize..self.row_start[p + 1] as usize
+        } else {
+            0..0
+        }
     }
 
     /// Bytes of heap memory held.
     pub fn heap_bytes(&self) -> usize {
+        4 * (self.i.capacity()
+            + self.j.capacity()
+            + self.row_start.capacity()
+            + self.rev_start.capacity()
+            + self.rev_pair.capacity())
+            + 8 * self.history.capacity()
+            + self.spare.heap_bytes()
+    }
+}
+
+/// Empties `v` and makes room for `len` values: in place when it has the room, else in a
+/// new allocation with an eighth to spare (the old one freed first), so that a slowly
+/// growing list reallocates now and then, not at every rebuild.
+fn room<T>(v: &mut Vec<T>, len: usize) {
+    v.clear();
+    if v.capacity() < len {
+        *v = Vec::new();
+        *v = Vec::with_capacity(len + len / 8);
+    }
+}
+
+impl Buffers {
+    fn heap_bytes(&self) -> usize {
         4 * (self.i.capacity()
             + self.j.capacity()
             + self.row_start.capacity()
