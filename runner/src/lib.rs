@@ -10,6 +10,7 @@ pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod lab;
+pub mod memory;
 pub mod progress;
 pub mod record;
 pub mod sweep;

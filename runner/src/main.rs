@@ -5,6 +5,7 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    tilth::memory::return_large_blocks();
     let cli = tilth::cli::Cli::parse();
     match tilth::cli::execute(cli, &mut std::io::stdout().lock()) {
         Ok(()) => ExitCode::from(tilth::EXIT_OK),
