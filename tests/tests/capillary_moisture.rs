@@ -120,34 +120,27 @@ fn more_moisture_reaches_further_and_none_pulls_nothing() {
 #[test]
 fn a_wall_adds_no_water_and_the_list_reach_bounds_every_pair() {
     let m = model_with(W);
-    let wall = Contact::with_wall(
-        DVec3::ZERO,
-        DVec3::new(0.999 * R, 0.0, 0.0),
-        R,
-        mass(R),
-        1.0,
-        DVec3::ZERO,
-        DVec3::ZERO,
-        DVec3::ZERO,
-        1e-6,
-    )
-    .unwrap();
+    // A grain of radius R whose centre is `distance` from a flat wall.
+    let at_wall = |distance: f64| {
+        Contact::with_wall(
+            DVec3::ZERO,
+            DVec3::new(distance, 0.0, 0.0),
+            R,
+            mass(R),
+            1.0,
+            DVec3::ZERO,
+            DVec3::ZERO,
+            DVec3::ZERO,
+            1e-6,
+        )
+        .unwrap()
+    };
     let mut h = vec![0.0; m.history_stride()];
-    m.evaluate(0, 0, &wall, &mut h).expect("touching");
+    m.evaluate(0, 0, &at_wall(0.999 * R), &mut h)
+        .expect("touching");
     let v = SHARE * W * mass(R) / (1000.0 * K);
     let gap = 0.5 * rupture(v);
-    let apart = Contact::with_wall(
-        DVec3::ZERO,
-        DVec3::new(R + gap, 0.0, 0.0),
-        R,
-        mass(R),
-        1.0,
-        DVec3::ZERO,
-        DVec3::ZERO,
-        DVec3::ZERO,
-        1e-6,
-    )
-    .unwrap();
+    let apart = at_wall(R + gap);
     let f = m.evaluate(0, 0, &apart, &mut h).unwrap().force.x;
     let expected = willett(R, v, gap);
     assert!((f - expected).abs() < 1e-12 * expected, "{f} vs {expected}");

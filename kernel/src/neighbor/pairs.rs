@@ -253,14 +253,20 @@ impl PairList {
 
     /// Bytes of heap memory held.
     pub fn heap_bytes(&self) -> usize {
-        4 * (self.i.capacity()
-            + self.j.capacity()
-            + self.row_start.capacity()
-            + self.rev_start.capacity()
-            + self.rev_pair.capacity())
-            + 8 * self.history.capacity()
-            + self.spare.heap_bytes()
+        let index = [
+            &self.i,
+            &self.j,
+            &self.row_start,
+            &self.rev_start,
+            &self.rev_pair,
+        ];
+        capacity_bytes(index, &self.history) + self.spare.heap_bytes()
     }
+}
+
+/// Heap bytes of a list's index vectors and history.
+fn capacity_bytes(index: [&Vec<u32>; 5], history: &Vec<f64>) -> usize {
+    4 * index.iter().map(|v| v.capacity()).sum::<usize>() + 8 * history.capacity()
 }
 
 /// Empties `v` and makes room for `len` values: in place when it has the room, else in a
@@ -276,11 +282,13 @@ fn room<T>(v: &mut Vec<T>, len: usize) {
 
 impl Buffers {
     fn heap_bytes(&self) -> usize {
-        4 * (self.i.capacity()
-            + self.j.capacity()
-            + self.row_start.capacity()
-            + self.rev_start.capacity()
-            + self.rev_pair.capacity())
-            + 8 * self.history.capacity()
+        let index = [
+            &self.i,
+            &self.j,
+            &self.row_start,
+            &self.rev_start,
+            &self.rev_pair,
+        ];
+        capacity_bytes(index, &self.history)
     }
 }
