@@ -97,7 +97,7 @@ impl PairList {
         });
         let r_max = radius.iter().copied().fold(0.0, f64::max);
         let grid = CellGrid::build(position, 2.0 * r_max + extra);
-        let b = std::mem::take(&mut self.spare);
+        let mut b = std::mem::take(&mut self.spare);
         let old = &*self;
         let stride = self.stride;
         // Two passes, so that a rebuild holds only the old list and the new one: first the
@@ -148,16 +148,12 @@ impl PairList {
 
         let total: usize = chunks.iter().map(|c| c.j.len()).sum();
         // Refill the spare buffers; new pairs start from a zero history.
-        let mut b = b;
         room(&mut b.i, total);
         room(&mut b.j, total);
         room(&mut b.row_start, n + 1);
-        room(&mut b.history, total * stride);
-        b.history.resize(total * stride, 0.0);
-        room(&mut b.rev_start, n + 1);
-        b.rev_start.resize(n + 1, 0);
-        room(&mut b.rev_pair, total);
-        b.rev_pair.resize(total, 0);
+        zeroed(&mut b.history, total * stride);
+        zeroed(&mut b.rev_start, n + 1);
+        zeroed(&mut b.rev_pair, total);
         let mut list = PairList {
             i: b.i,
             j: b.j,
@@ -278,6 +274,12 @@ fn room<T>(v: &mut Vec<T>, len: usize) {
         *v = Vec::new();
         *v = Vec::with_capacity(len + len / 8);
     }
+}
+
+/// [`room`], then `len` zeros.
+fn zeroed<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
+    room(v, len);
+    v.resize(len, T::default());
 }
 
 impl Buffers {
