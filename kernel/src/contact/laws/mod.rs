@@ -25,6 +25,7 @@ registry! {
     capillary_moisture,
     twisting,
     plastic_adhesion,
+    sjkr,
     bond,
 }
 
