@@ -2,6 +2,8 @@
 # The settling-bed speed benchmark (../shared/benchmarks/settling-bed/README.md), run in tilth,
 # LIGGGHTS and LAMMPS in one sitting on this machine; prints particle-steps/s and the ratios
 # that BENCHMARKS.md records. Peers: apt-get install -y liggghts lammps (not needed by CI).
+# Each peer is compared with tilth running its deck's cohesion: LIGGGHTS's simplified JKR
+# (`--cohesion sjkr`) and LAMMPS's full JKR (`--cohesion jkr`, tilth's default).
 #
 #   tools/bench/settling-bed.sh            # N=20000 particles, S=20000 steps
 #   N=20000 S=5000 tools/bench/settling-bed.sh
@@ -20,9 +22,11 @@ loop_time() { grep -E "^Loop time of" "$1" | tail -1 | awk '{print $4}'; }
 
 echo "settling bed: $N particles, $S steps, $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores"
 declare -A R
-for t in 1 2; do
-  R[tilth$t]=$("$TILTH" bench settling-bed --particles "$N" --steps "$S" --threads "$t" --quiet | tail -1 | awk '{print $2}')
-  echo "tilth ${t} thread(s): ${R[tilth$t]} particle-steps/s"
+for c in sjkr jkr; do
+  for t in 1 2; do
+    R[$c$t]=$("$TILTH" bench settling-bed --particles "$N" --steps "$S" --threads "$t" --cohesion "$c" --quiet | tail -1 | awk '{print $2}')
+    echo "tilth --cohesion $c, ${t} thread(s): ${R[$c$t]} particle-steps/s"
+  done
 done
 if command -v liggghts >/dev/null; then
   (cd "$work" && liggghts -in "$DECK/bed.liggghts" -var npart "$N" -var nsteps "$S" -log none > liggghts.out 2>&1)
@@ -34,7 +38,9 @@ if command -v lmp >/dev/null; then
   R[lammps]=$(rate "$(loop_time "$work/lammps.out")")
   echo "LAMMPS: ${R[lammps]} particle-steps/s (loop time $(loop_time "$work/lammps.out") s)"
 fi
-awk -v a="${R[tilth1]}" -v b="${R[tilth2]}" 'BEGIN { printf "tilth speed-up 1 -> 2 threads: %.2fx\n", b / a }'
-[ -n "${R[liggghts]:-}" ] && awk -v a="${R[tilth1]}" -v l="${R[liggghts]}" 'BEGIN { printf "tilth (1 thread) / LIGGGHTS: %.2fx\n", a / l }'
-[ -n "${R[lammps]:-}" ] && awk -v a="${R[tilth1]}" -v l="${R[lammps]}" 'BEGIN { printf "tilth (1 thread) / LAMMPS: %.2fx\n", a / l }'
+for c in sjkr jkr; do
+  awk -v a="${R[${c}1]}" -v b="${R[${c}2]}" -v c="$c" 'BEGIN { printf "tilth (%s) speed-up 1 -> 2 threads: %.2fx\n", c, b / a }'
+done
+[ -n "${R[liggghts]:-}" ] && awk -v a="${R[sjkr1]}" -v l="${R[liggghts]}" 'BEGIN { printf "tilth (sjkr, 1 thread) / LIGGGHTS: %.2fx\n", a / l }'
+[ -n "${R[lammps]:-}" ] && awk -v a="${R[jkr1]}" -v l="${R[lammps]}" 'BEGIN { printf "tilth (jkr, 1 thread) / LAMMPS: %.2fx\n", a / l }'
 exit 0
