@@ -10,14 +10,15 @@
 //! The cohesion is chosen with `--cohesion`: `jkr` (the default) makes the normal law full JKR
 //! with surface energy 0.356 J/m^2 (as the LAMMPS deck, `bed.lammps`); `sjkr` keeps the normal
 //! law Hertz and adds LIGGGHTS's simplified JKR as an extra law with cohesion energy density
-//! 0.356 J/m^3 (as the LIGGGHTS deck, `bed.liggghts`). Either way one soil-soil pair serves
-//! particles and walls, so the walls get the cohesion and rolling friction too (the LIGGGHTS
-//! deck gives its walls neither cohesion nor, except the floor, rolling friction).
+//! 0.356 J/m^3 (as the LIGGGHTS deck, `bed.liggghts`). As in the decks, cohesion acts between
+//! particles only, and the walls take the particles' elastic constants with their own contact
+//! coefficients: with `sjkr` the floor has rolling friction and the side walls none (LIGGGHTS
+//! deck); with `jkr` no wall has rolling friction (LAMMPS deck, whose rolling model between
+//! particles is a spring-dashpot-slider where tilth keeps CDT).
 
 use crate::progress::Progress;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use std::collections::BTreeMap;
 use std::io::Write;
 use std::time::{Duration, Instant};
 use tilth_kernel::DVec3;
@@ -75,13 +76,20 @@ pub fn bench(which: &Bench, out: &mut dyn Write) -> Result<()> {
 
 /// The benchmark scene.
 pub fn settling_bed_setup(args: &SettlingBedArgs) -> Result<Setup> {
+    // The decks give the walls the particles' elastic material; "floor" and "side" only
+    // carry their own contact coefficients.
     let soil = Material::new("soil", 13.5e6, 0.2, 1380.0)?;
-    let (normal, extra, cohesion) = match args.cohesion {
-        Cohesion::Jkr => ("jkr", vec![], ("surface_energy", 0.356)),
+    let floor = Material::new("floor", 13.5e6, 0.2, 1380.0)?;
+    let side = Material::new("side", 13.5e6, 0.2, 1380.0)?;
+    // Cohesion acts between particles only in both decks; rolling friction acts between
+    // particles and (LIGGGHTS) on the floor, nowhere on the walls in the LAMMPS deck.
+    let (normal, extra, cohesion, floor_rolling) = match args.cohesion {
+        Cohesion::Jkr => ("jkr", vec![], "surface_energy", 0.0),
         Cohesion::Sjkr => (
             "hertz",
             vec!["sjkr".to_string()],
-            ("cohesion_energy_density", 0.356),
+            "cohesion_energy_density",
+            0.15,
         ),
     };
     let spec = ModelSpec {
@@ -91,35 +99,42 @@ pub fn settling_bed_setup(args: &SettlingBedArgs) -> Result<Setup> {
         rolling: Some("cdt".into()),
         extra,
     };
-    let params: BTreeMap<String, f64> = [
-        ("restitution", 0.45),
-        ("friction", 0.6),
-        ("rolling_friction", 0.15),
-        cohesion,
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
-    let pair = PairSpec {
-        materials: ("soil".into(), "soil".into()),
-        params,
+    let pair = |other: &str, rolling: f64, cohesion_value: f64| PairSpec {
+        materials: ("soil".into(), other.into()),
+        params: [
+            ("restitution", 0.45),
+            ("friction", 0.6),
+            ("rolling_friction", rolling),
+            (cohesion, cohesion_value),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect(),
     };
-    let model = ContactModel::build(std::slice::from_ref(&soil), &spec, &[pair])?;
-    let plane = |name: &str, point: [f64; 3], normal: [f64; 3]| {
+    let model = ContactModel::build(
+        &[soil.clone(), floor, side],
+        &spec,
+        &[
+            pair("soil", 0.15, 0.356),
+            pair("floor", floor_rolling, 0.0),
+            pair("side", 0.0, 0.0),
+        ],
+    )?;
+    let plane = |name: &str, material: u16, point: [f64; 3], normal: [f64; 3]| {
         let shape = Plane::new(DVec3::from_array(point), DVec3::from_array(normal))
             .expect("non-zero normal");
-        Wall::new(name, Box::new(shape), 0, Motion::Fixed)
+        Wall::new(name, Box::new(shape), material, Motion::Fixed)
     };
     // The deck's box holds 20,000 particles; larger runs widen it (same height, same
     // settling time) so the density per floor area stays the deck's.
     let s = (args.particles as f64 / 20_000.0).max(1.0).sqrt();
     let half = 0.03 * s;
     let walls = vec![
-        plane("floor", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-        plane("x-", [-half, 0.0, 0.0], [1.0, 0.0, 0.0]),
-        plane("x+", [half, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-        plane("y-", [0.0, -half, 0.0], [0.0, 1.0, 0.0]),
-        plane("y+", [0.0, half, 0.0], [0.0, -1.0, 0.0]),
+        plane("floor", 1, [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        plane("x-", 2, [-half, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        plane("x+", 2, [half, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        plane("y-", 2, [0.0, -half, 0.0], [0.0, 1.0, 0.0]),
+        plane("y+", 2, [0.0, half, 0.0], [0.0, -1.0, 0.0]),
     ];
     let mut factory = Factory::new(FactorySpec {
         region: Region::Box {
@@ -236,4 +251,40 @@ fn peak_rss_kb() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     line.split_whitespace().nth(1)?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(cohesion: Cohesion) -> SettlingBedArgs {
+        SettlingBedArgs {
+            particles: 300,
+            steps: 0,
+            threads: 1,
+            seed: 1,
+            quiet: true,
+            cohesion,
+        }
+    }
+
+    /// Both decks' scenes build, give every wall the coefficients of its own material pair,
+    /// and run without a failure.
+    #[test]
+    fn both_cohesions_build_and_run() {
+        for c in [Cohesion::Jkr, Cohesion::Sjkr] {
+            let mut sim = Simulation::new(settling_bed_setup(&args(c)).unwrap()).unwrap();
+            assert_eq!(sim.particles.len(), 300);
+            let m = &sim.model;
+            let (soil, floor, side) = (
+                m.material_index("soil").unwrap(),
+                m.material_index("floor").unwrap(),
+                m.material_index("side").unwrap(),
+            );
+            assert!(m.has_pair(soil, floor) && m.has_pair(soil, side));
+            assert_eq!(sim.walls[0].material as usize, floor);
+            assert!(sim.walls[1..].iter().all(|w| w.material as usize == side));
+            sim.run(2_000).unwrap();
+        }
+    }
 }
