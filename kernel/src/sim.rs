@@ -94,8 +94,7 @@ pub struct Simulation {
     /// skin + the laws' reach: the list distance beyond touching.
     extra: f64,
     pairs: PairList,
-    /// What the second member of each listed pair receives (see [`PairRecord`]).
-    pair_out: Vec<PairRecord>,
+    pair_out: Vec<ContactOut>,
     walls_near: WallContacts,
     ref_position: Vec<DVec3>,
     wall_ref_offset: Vec<DVec3>,
@@ -457,7 +456,7 @@ impl Simulation {
         });
         self.walls_near = new_walls;
         self.pair_out
-            .resize(self.pairs.len(), PairRecord::default());
+            .resize(self.pairs.len(), ContactOut::default());
         self.ref_position.clone_from(&self.particles.position);
         for (r, w) in self.wall_ref_offset.iter_mut().zip(&self.walls) {
             *r = w.offset;
@@ -521,76 +520,22 @@ impl Simulation {
     fn compute_forces(&mut self, kick: bool) -> Option<(usize, Failure)> {
         let dt = self.dt;
         let time = self.time;
+        let p = &self.particles;
         let model = &self.model;
         let pairs = &mut self.pairs;
         let stride = pairs.stride;
-        let (pj, row_start) = (&pairs.j, &pairs.row_start);
-        let Particles {
-            position,
-            velocity,
-            angular_velocity,
-            force,
-            torque,
-            radius,
-            mass,
-            inertia,
-            material,
-            ..
-        } = &mut self.particles;
-        let kin = Kinematics {
-            position,
-            velocity,
-            angular_velocity,
-            radius,
-            mass,
-            inertia,
-            material,
-        };
-        let n = kin.position.len();
-        // Pair phase, by chunks of particles: each task owns the rows (pairs (i, j), i < j) of
-        // its particles. Particle i's share is summed in row order on the spot; j's share is
-        // recorded for the particle phase, which reads it in a fixed order.
-        let mut tasks = Vec::with_capacity(n.div_ceil(CHUNK));
-        {
-            let (mut out, mut hist) = (&mut self.pair_out[..], &mut pairs.history[..]);
-            let mut at = 0usize;
-            for c in 0..n.div_ceil(CHUNK) {
-                let end = row_start[((c + 1) * CHUNK).min(n)] as usize;
-                let (o1, o2) = out.split_at_mut(end - at);
-                let (h1, h2) = hist.split_at_mut((end - at) * stride);
-                tasks.push((at, o1, h1));
-                out = o2;
-                hist = h2;
-                at = end;
-            }
-        }
+        let (pi, pj) = (&pairs.i, &pairs.j);
+        let out = &mut self.pair_out;
         self.pool.install(|| {
-            force
-                .par_chunks_mut(CHUNK)
-                .zip(torque.par_chunks_mut(CHUNK))
-                .zip(tasks.into_par_iter())
+            out.par_chunks_mut(CHUNK)
+                .zip(pairs.history.par_chunks_mut(CHUNK * stride))
                 .enumerate()
-                .for_each(|(c, ((fs, ts), (base, out, hist)))| {
-                    for k in 0..fs.len() {
-                        let i = c * CHUNK + k;
-                        let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
-                        for q in row_start[i] as usize - base..row_start[i + 1] as usize - base {
-                            let j = pj[base + q] as usize;
-                            let h = &mut hist[q * stride..(q + 1) * stride];
-                            out[q] = match pair_force(&kin, model, i, j, h, dt, time) {
-                                Some(o) => {
-                                    f += o.force;
-                                    t += o.torque_i;
-                                    PairRecord {
-                                        force: o.force,
-                                        torque_j: o.torque_j,
-                                    }
-                                }
-                                None => PairRecord::default(),
-                            };
-                        }
-                        fs[k] = f;
-                        ts[k] = t;
+                .for_each(|(c, (out, hist))| {
+                    let base = c * CHUNK;
+                    for (k, o) in out.iter_mut().enumerate() {
+                        let (i, j) = (pi[base + k] as usize, pj[base + k] as usize);
+                        let h = &mut hist[k * stride..(k + 1) * stride];
+                        *o = pair_force(p, model, i, j, h, dt, time).unwrap_or_default();
                     }
                 });
         });
@@ -641,10 +586,14 @@ impl Simulation {
                         let mut first = None;
                         for k in 0..fs.len() {
                             let i = c * CHUNK + k;
-                            // Gravity, then i's own rows (summed by the pair phase), then
-                            // the pairs where i is the second member, then the walls.
-                            let mut f = gravity * mass[i] + fs[k];
-                            let mut t = ts[k];
+                            let mut f = gravity * mass[i];
+                            let mut t = DVec3::ZERO;
+                            for o in
+                                &out[pairs.row_start[i] as usize..pairs.row_start[i + 1] as usize]
+                            {
+                                f += o.force;
+                                t += o.torque_i;
+                            }
                             for &kk in &pairs.rev_pair
                                 [pairs.rev_start[i] as usize..pairs.rev_start[i + 1] as usize]
                             {
@@ -944,7 +893,7 @@ impl Simulation {
         let w = &self.walls_near;
         self.particles.heap_bytes()
             + self.pairs.heap_bytes()
-            + self.pair_out.capacity() * std::mem::size_of::<PairRecord>()
+            + self.pair_out.capacity() * std::mem::size_of::<ContactOut>()
             + self.ref_position.capacity() * 24
             + w.start.capacity() * 4
             + w.wall.capacity() * 2
@@ -998,30 +947,11 @@ enum Failure {
     Escaped,
 }
 
-/// The force on i of a listed pair (i, j) and the torque on j: what the particle phase reads
-/// for j (i's share is summed in the pair phase).
-#[derive(Debug, Clone, Copy, Default)]
-struct PairRecord {
-    force: DVec3,
-    torque_j: DVec3,
-}
-
-/// The particle state a pair force reads (the force and torque arrays are being written).
-struct Kinematics<'a> {
-    position: &'a [DVec3],
-    velocity: &'a [DVec3],
-    angular_velocity: &'a [DVec3],
-    radius: &'a [f64],
-    mass: &'a [f64],
-    inertia: &'a [f64],
-    material: &'a [u16],
-}
-
 /// The force of listed pair (i, j), or `None` when they do not interact. `time` stamps a
 /// bond that breaks.
 #[inline]
 fn pair_force(
-    p: &Kinematics,
+    p: &Particles,
     model: &ContactModel,
     i: usize,
     j: usize,
