@@ -731,7 +731,7 @@ impl Simulation {
             ),
             Failure::Runaway => (
                 format!("particle {i} moves at {:.3e} m/s, above the {:.3e} m/s any physical motion here can reach (runaway kinetic energy)", v.length(), self.speed_limit),
-                dt_cause.unwrap_or_else(|| "energy is being injected: particles created overlapping, a wall moving or a servo pushing too fast, or an unstable law parameter".into()),
+                dt_cause.unwrap_or_else(|| "energy is being injected: particles created overlapping, a wall moving or a servo pushing too fast, an unstable law parameter, or a step too long for strongly damped contacts (a low restitution coefficient, such as 0.15, lowers the explicit scheme's stability limit for the tangential spring: try 20 % of the Rayleigh time)".into()),
             ),
             Failure::Escaped => {
                 // Faster than free fall plus every imposed speed: it was shot out, not spilled.

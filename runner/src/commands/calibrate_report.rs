@@ -99,7 +99,7 @@ fn chrono_free_note() -> String {
 
 pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]) -> String {
     let mut s = format!(
-        "# Calibration of {} against {}\n\n{} free parameter(s): {}; {} seeds per setting; tolerance {} %{}.\n\n",
+        "# Calibration of {} against {}\n\n{} free parameter(s): {}; {} seeds per surface setting, {} per check; tolerance {} %{}.\n\n",
         args.test,
         args.data.display(),
         params.len(),
@@ -109,10 +109,11 @@ pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]
             .collect::<Vec<_>>()
             .join(", "),
         args.seeds,
+        args.check_seeds.unwrap_or(args.seeds),
         args.tolerance,
         if args.coarse { "; coarse preset" } else { "" }
     );
-    s += "| conditions | measured | start | calibrated | simulated (mean +- sd) | error | within |\n|---|---|---|---|---|---|---|\n";
+    s += "| conditions | measured | start | calibrated | simulated (mean +- sd) | error +- s.e. | within | beyond scatter |\n|---|---|---|---|---|---|---|---|\n";
     let v = |x: &[f64]| {
         x.iter()
             .map(|v| format!("{v:.4}"))
@@ -121,7 +122,7 @@ pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]
     };
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {} | {:.2} +- {:.2} (n={}) | {:+.2} % | {} |\n",
+            "| {} | {} | {} | {} | {:.2} +- {:.2} (n={}) | {:+.2} +- {} % | {} | {} |\n",
             describe(&r.conditions),
             r.measured,
             v(&r.start),
@@ -130,10 +131,17 @@ pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]
             r.simulated_sd.unwrap_or(f64::NAN),
             r.iterations.last().map_or(0, |i| i.values.len()),
             r.error_pct,
-            if r.within_tolerance { "yes" } else { "NO" }
+            r.error_se_pct.map_or("-".into(), |v| format!("{v:.2}")),
+            if r.within_tolerance { "yes" } else { "NO" },
+            if r.within_beyond_scatter { "yes" } else { "no" }
         );
     }
-    s += "\n";
+    s += &format!(
+        "\nerror +- s.e.: the mean's relative error and its standard error (sd / sqrt(n) / measured); \
+         \"beyond scatter\": |error| + 2 s.e. <= {} %, so that the scatter between seeds cannot have put \
+         the mean inside the tolerance by chance.\n\n",
+        args.tolerance
+    );
     for r in rows {
         s += &format!("## {}\n\n", describe(&r.conditions));
         s += &format!(

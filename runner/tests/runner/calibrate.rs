@@ -23,6 +23,8 @@ fn calibrate_repose_at_one_moisture() {
         "soil-soil.surface_energy=0.05:1.0",
         "--seeds",
         "1",
+        "--check-seeds",
+        "2",
         "--refine",
         "0",
         "--coarse",
@@ -44,9 +46,26 @@ fn calibrate_repose_at_one_moisture() {
             .unwrap();
     let c = &v["conditions"][0];
     assert_eq!(c["measured"], 35.53);
-    // 3 x 3 factorial + 2 centre points, one seed each; then one run at the chosen setting.
+    // 3 x 3 factorial + 2 centre points, one seed each; then two runs at the chosen setting.
     assert_eq!(c["surface_runs"], 11);
     assert_eq!(c["iterations"].as_array().unwrap().len(), 1);
+    let check = &c["iterations"][0];
+    let values: Vec<f64> = check["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(values.len(), 2);
+    // The error's standard error is the two runs' sd / sqrt(2) over the measurement.
+    let sd = (values[0] - values[1]).abs() / 2f64.sqrt();
+    let se = 100.0 * sd / 2f64.sqrt() / 35.53;
+    assert!((c["error_se_pct"].as_f64().unwrap() - se).abs() < 1e-9 * se.max(1.0));
+    let err = c["error_pct"].as_f64().unwrap();
+    assert_eq!(
+        c["within_beyond_scatter"].as_bool().unwrap(),
+        err.abs() + 2.0 * se <= 2.0
+    );
     let setting = c["calibrated"].as_array().unwrap();
     assert!((0.05..=0.45).contains(&setting[0].as_f64().unwrap()));
     assert!((0.05..=1.0).contains(&setting[1].as_f64().unwrap()));

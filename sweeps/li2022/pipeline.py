@@ -1,0 +1,345 @@
+#!/usr/bin/env python3
+"""The reference study (Li et al. 2022) as one pipeline, with tilth's own simulations.
+
+    sweeps/li2022/pipeline.py OUT [--cores N] [--replicates N] [--tilth PATH]
+
+Plackett-Burman screening (pb.toml, table 6) -> its ANOVA beside the study's (table 7) ->
+the steepest-ascent path (steepest_ascent.toml, table 8) -> the next design's ranges from the
+path's best run (`tilth rsm next`, as the study chose table 9's levels) -> Box-Behnken
+(bbd.toml with those ranges, table 9) -> the study's error-rate fits per moisture (table 10,
+equations 10-13) and the angle's own fit solved for each moisture's measured angle (the
+ridge) -> one setting per moisture (restitution at the study's 0.45, the ridge point nearest
+the design centre) -> validation runs of the funnel test at each moisture with several seeds
+(`tilth compare`) against table 1, beside the study's own validation (table 11).
+
+Everything is written under OUT: each sweep's runs and results.csv, every command's output,
+the calibrated model (OUT/model.toml) and OUT/report.md, which puts each of the study's
+tables beside tilth's numbers. Each step is resumable (sweeps skip finished runs), so an
+interrupted pipeline picks up where it stopped when run again with the same OUT.
+
+Only the Python standard library is used; `tilth` must be on PATH (or --tilth).
+"""
+
+import argparse
+import csv
+import json
+import math
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent.parent
+DATA = HERE / "data"
+MOISTURES = [3, 6, 9, 12]
+FACTORS7 = ["x1", "x2", "x3", "x4", "x5", "x6", "x7"]
+PATH_FACTORS = ["x4", "x6", "x7"]
+STUDY_RESTITUTION = 0.45  # table 11: the study fixed x4 at 0.45 for every moisture
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def measured_angles():
+    return {int(r["moisture_pct"]): float(r["repose_angle_deg"])
+            for r in read_csv(DATA / "table01_friction_repose.csv")}
+
+
+class Pipeline:
+    def __init__(self, args):
+        self.out = Path(args.out).resolve()
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.tilth = args.tilth
+        self.cores = str(args.cores)
+        self.replicates = args.replicates
+        self.report = []
+
+    def run(self, *argv, capture=None):
+        """Runs tilth; with `capture`, its stdout also goes to OUT/capture."""
+        cmd = [self.tilth, *map(str, argv)]
+        print("$ " + " ".join(cmd), file=sys.stderr, flush=True)
+        done = subprocess.run(cmd, stdout=subprocess.PIPE, text=True)
+        if capture:
+            (self.out / capture).write_text(done.stdout)
+        if done.returncode != 0:
+            sys.exit(f"pipeline: `{' '.join(cmd)}` failed (exit {done.returncode})")
+        return done.stdout
+
+    def sweep(self, sweep_file, name):
+        """Runs a sweep; runs that failed stay failed (the fits leave them out, naming them)."""
+        cmd = [self.tilth, "sweep", "run", str(sweep_file), "--out", str(self.out / name),
+               "--cores", self.cores, "--quiet"]
+        print("$ " + " ".join(cmd), file=sys.stderr, flush=True)
+        code = subprocess.run(cmd).returncode
+        results = self.out / name / "results.csv"
+        if not results.exists():
+            sys.exit(f"pipeline: {sweep_file} wrote no results (exit {code})")
+        return read_csv(results)
+
+    def h(self, text):
+        self.report.append(f"\n## {text}\n")
+
+    def p(self, text=""):
+        self.report.append(text)
+
+    def block(self, text):
+        self.report.append("```\n" + text.rstrip() + "\n```")
+
+    # 1. Plackett-Burman -----------------------------------------------------------------
+    def screening(self):
+        rows = self.sweep(HERE / "pb.toml", "pb")
+        study = read_csv(DATA / "table06_pb_runs.csv")
+        self.h("Table 6: Plackett-Burman screening, the study's angle and tilth's")
+        self.p("| run | x1..x7 (coded) | study, deg | tilth, deg | tilth status |")
+        self.p("|---|---|---|---|---|")
+        for s, t in zip(study, rows):
+            coded = " ".join(f"{float(s[f]):+.0f}" for f in FACTORS7)
+            self.p(f"| {s['run']} | {coded} | {float(s['repose_angle_deg']):.2f} | "
+                   f"{fmt(t.get('repose_angle_deg'))} | {t['status']} |")
+        self.p()
+        text = self.run("rsm", "fit", self.out / "pb" / "results.csv",
+                        "--response", "repose_angle_deg", "--factors", ",".join(FACTORS7),
+                        "--centre-curvature", "--plot", self.out / "pb",
+                        capture="pb-anova.txt")
+        study_text = self.run("rsm", "fit", DATA / "table06_pb_runs.csv",
+                              "--response", "repose_angle_deg", "--factors", ",".join(FACTORS7),
+                              "--centre-curvature", "--reported",
+                              DATA / "table07_pb_anova_reported.csv",
+                              capture="pb-anova-study.txt")
+        self.h("Table 7: the screening's ANOVA")
+        self.p("The study's (from its table 6, beside its printed table 7):")
+        self.block(study_text)
+        self.p("tilth's, from its own runs (Pareto and main-effect charts in `pb/`):")
+        self.block(text)
+
+    # 2. Steepest ascent -----------------------------------------------------------------
+    def steepest_ascent(self):
+        rows = self.sweep(HERE / "steepest_ascent.toml", "steepest_ascent")
+        study = read_csv(DATA / "table08_steepest_ascent.csv")
+        targets = measured_angles()
+        self.h("Table 8: steepest ascent along x4, x6, x7")
+        self.p("| step | x4 | x6 | x7 | study, deg | tilth, deg |")
+        self.p("|---|---|---|---|---|---|")
+        for s, t in zip(study, rows):
+            self.p(f"| {s['run']} | {s['x4']} | {s['x6']} | {s['x7']} | "
+                   f"{float(s['repose_angle_deg']):.2f} | {fmt(t.get('repose_angle_deg'))} |")
+        self.p()
+        target = ",".join(f"{targets[m]}" for m in MOISTURES)
+        nxt = json.loads(self.run("rsm", "next", self.out / "steepest_ascent" / "results.csv",
+                                  "--response", "repose_angle_deg",
+                                  "--factors", ",".join(PATH_FACTORS), "--target", target,
+                                  "--neighbours", "2", "--json", capture="next.json"))
+        study_next = json.loads(self.run("rsm", "next", DATA / "table08_steepest_ascent.csv",
+                                         "--response", "repose_angle_deg",
+                                         "--factors", ",".join(PATH_FACTORS),
+                                         "--target", target, "--neighbours", "2", "--json"))
+        self.p(f"tilth: {nxt['statement']}.")
+        self.p()
+        self.p(f"The study's path, by the same rule: {study_next['statement']} "
+               "(table 9's levels).")
+        return nxt
+
+    # 3. Box-Behnken ---------------------------------------------------------------------
+    def box_behnken(self, nxt):
+        text = (HERE / "bbd.toml").read_text()
+        text = text.replace('scene = "../experiments/repose.toml"',
+                            f'scene = "{(HERE.parent / "experiments" / "repose.toml").as_posix()}"')
+        for f, lo, hi in zip(nxt["factors"], nxt["low"], nxt["high"]):
+            pattern = re.compile(rf'(name = "{f}"\n(?:[^\[]*?\n)*?)low = [^\n]*\nhigh = [^\n]*')
+            text, n = pattern.subn(rf"\g<1>low = {lo:.6g}\nhigh = {hi:.6g}", text, count=1)
+            if n != 1:
+                sys.exit(f"pipeline: could not set the range of {f} in bbd.toml")
+        bbd = self.out / "bbd.toml"
+        bbd.write_text("# Written by pipeline.py: bbd.toml with the ranges `tilth rsm next` chose.\n"
+                       + text)
+        rows = self.sweep(bbd, "bbd")
+        targets = measured_angles()
+        # The study's response per moisture: the relative error of the simulated angle.
+        table = self.out / "bbd" / "errors.csv"
+        with open(table, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(PATH_FACTORS + ["repose_angle_deg"] + [f"err_{m}pct" for m in MOISTURES])
+            for r in rows:
+                a = r.get("repose_angle_deg") or ""
+                errs = [f"{abs(float(a) - targets[m]) / targets[m]:.6f}" if a else ""
+                        for m in MOISTURES]
+                w.writerow([r[f] for f in PATH_FACTORS] + [a] + errs)
+        study = read_csv(DATA / "table09_bbd_runs.csv")
+        self.h("Table 9: Box-Behnken runs")
+        self.p("| run | x4, x6, x7 (coded) | study, deg | tilth, deg | tilth status |")
+        self.p("|---|---|---|---|---|")
+        for i, t in enumerate(rows):
+            s = study[i] if i < len(study) else None
+            coded = " ".join(f"{float(s[f + '_coded']):+.0f}" for f in PATH_FACTORS) if s else "0 0 0"
+            angle = f"{float(s['repose_angle_deg']):.2f}" if s else "(not printed)"
+            self.p(f"| {i + 1} | {coded} | {angle} | {fmt(t.get('repose_angle_deg'))} | {t['status']} |")
+        self.p()
+        reported = read_csv(DATA / "table10_bbd_anova_reported.csv")
+        r2_study = {m: next(r[f"p_{m}pct"] for r in reported if r["source"] == "r_squared")
+                    for m in MOISTURES}
+        self.h("Table 10, equations (10)-(13): quadratic fits of the error rate per moisture")
+        summary = ["| moisture | study R^2 | tilth R^2 | tilth adj. R^2 | tilth pred. R^2 |",
+                   "|---|---|---|---|---|"]
+        texts = []
+        for m in MOISTURES:
+            out = self.run("rsm", "fit", table, "--response", f"err_{m}pct",
+                           "--factors", ",".join(PATH_FACTORS), "--model", "quadratic",
+                           "--json", capture=f"bbd-err-{m}pct.json")
+            fit = json.loads(out)
+            summary.append(f"| {m} % | {r2_study[m]} | {fit['r2']:.4f} | {fit['adj_r2']:.4f} | "
+                           f"{fmt(fit.get('pred_r2'))} |")
+            texts.append((m, self.run("rsm", "fit", table, "--response", f"err_{m}pct",
+                                      "--factors", ",".join(PATH_FACTORS), "--model", "quadratic",
+                                      capture=f"bbd-err-{m}pct.txt")))
+        self.p("\n".join(summary))
+        self.p()
+        for m, t in texts:
+            self.p(f"tilth, {m} % moisture:")
+            self.block(t)
+        return nxt
+
+    # 4. Solve per moisture --------------------------------------------------------------
+    def solve(self, nxt):
+        targets = measured_angles()
+        target = ",".join(f"{m}%={targets[m]}" for m in MOISTURES)
+        table = self.out / "bbd" / "results.csv"
+        common = ["rsm", "solve", table, "--response", "repose_angle_deg",
+                  "--factors", ",".join(PATH_FACTORS), "--model", "quadratic",
+                  "--fix", f"x4={STUDY_RESTITUTION}", "--target", target]
+        text = self.run(*common, "--plot", self.out / "solve", capture="solve.txt")
+        solved = json.loads(self.run(*common, "--json", capture="solve.json"))
+        centre = [(lo + hi) / 2 for lo, hi in zip(nxt["low"], nxt["high"])]
+        half = [(hi - lo) / 2 for lo, hi in zip(nxt["low"], nxt["high"])]
+        chosen = {}
+        for m, s in zip(MOISTURES, solved["solutions"]):
+            candidates = s["settings"] or ([s["closest"]] if s.get("closest") else [])
+            if not candidates:
+                sys.exit(f"pipeline: no setting found for {m} % moisture")
+            best = min(candidates, key=lambda c: sum(((v - c0) / h) ** 2 for v, c0, h
+                                                       in zip(c["values"], centre, half)))
+            chosen[m] = (best["values"], bool(s["settings"]), s["statement"])
+        study = {int(r["moisture_pct"]): r for r in read_csv(DATA / "table11_calibrated_contact.csv")}
+        self.h("Table 11: the calibrated contact parameters")
+        self.p("The angle's own quadratic fit, solved for each moisture's measured angle with x4 "
+               f"fixed at the study's {STUDY_RESTITUTION}; where one angle leaves a ridge of "
+               "settings, the pipeline takes the point nearest the design centre (coded units) "
+               "and says so. `tilth rsm solve` in full:")
+        self.block(text)
+        self.p("| moisture | study x6, x7 | tilth x6, x7 | tilth's choice |")
+        self.p("|---|---|---|---|")
+        for m in MOISTURES:
+            v, on_ridge, _ = chosen[m]
+            self.p(f"| {m} % | {study[m]['soil_soil_rolling_friction']}, "
+                   f"{study[m]['jkr_surface_energy_j_per_m2']} | {v[1]:.4f}, {v[2]:.4f} | "
+                   f"{'ridge point nearest the centre' if on_ridge else 'no exact solution: the closest prediction'} |")
+        self.p()
+        return chosen
+
+    # 5. Validation ----------------------------------------------------------------------
+    def validate(self, chosen):
+        model = (REPO / "models" / "li2022.toml").read_text()
+        xs = ", ".join(str(m) for m in MOISTURES)
+
+        def table(i):
+            return ("{ interpolate = \"moisture_pct\", x = [" + xs + "], y = ["
+                    + ", ".join(f"{chosen[m][0][i]:.6g}" for m in MOISTURES) + "] }")
+
+        model = set_pair_key(model, "soil-soil", "restitution", f"{STUDY_RESTITUTION}")
+        model = set_pair_key(model, "soil-soil", "rolling_friction", table(1))
+        model = set_pair_key(model, "soil-soil", "surface_energy", table(2))
+        # The surfaces were fitted with the screening's other factors at its centre.
+        model = set_pair_key(model, "soil-soil", "friction", "0.8")
+        model = set_pair_key(model, "soil-steel", "restitution", "0.35")
+        model = set_pair_key(model, "soil-steel", "friction", "0.85")
+        model = set_pair_key(model, "soil-steel", "rolling_friction", "0.225")
+        path = self.out / "model.toml"
+        path.write_text("# Written by sweeps/li2022/pipeline.py: models/li2022.toml with the "
+                        "pipeline's calibrated\n# soil-soil rolling friction and surface energy "
+                        "per moisture.\n" + model)
+        coarse = "--coarse" if '"coarse" = true' in (HERE / "pb.toml").read_text() else None
+        argv = ["compare", "--model", path, "--data", REPO / "data" / "li2022" / "measurements.csv",
+                "--tests", "repose", "--replicates", self.replicates, "--cores", self.cores,
+                "--out", self.out / "validation", "--quiet"]
+        if coarse:
+            argv.append(coarse)
+        self.run(*argv)
+        rows = json.loads((self.out / "validation" / "compare.json").read_text())["rows"]
+        study = {int(r["moisture_pct"]): r for r in read_csv(DATA / "table11_calibrated_contact.csv")}
+        self.h("Validation: the calibrated model's funnel test against table 1")
+        self.p(f"`tilth compare` with OUT/model.toml, {self.replicates} seeds per moisture "
+               "(mean +- standard deviation between seeds; the standard error of the mean is "
+               "sd / sqrt(seeds)):")
+        self.p()
+        self.p("| moisture | measured | study simulated (error) | tilth mean +- sd | s.e. of mean | tilth error |")
+        self.p("|---|---|---|---|---|---|")
+        worst = 0.0
+        for r in rows:
+            m = int(r["conditions"]["moisture_pct"])
+            sims = [v for v in r["simulated"] if v is not None]
+            sd = r.get("simulated_scatter")
+            se = sd / math.sqrt(len(sims)) if sd and sims else None
+            meas = r["value"]
+            s_sim = float(study[m]["simulated_repose_angle_deg"])
+            err = 100 * r["relative_error"] if r["relative_error"] is not None else None
+            if err is not None:
+                worst = max(worst, abs(err))
+            self.p(f"| {m} % | {meas:.2f} | {s_sim:.2f} ({100 * (s_sim - meas) / meas:+.2f} %) | "
+                   f"{fmt(r['simulated_mean'])} +- {fmt(sd)} | {fmt(se)} | "
+                   f"{'-' if err is None else f'{err:+.2f} %'} |")
+        self.p()
+        self.p(f"Worst error: tilth {worst:.2f} %, the study 4.72 % (its table 11 at 12 %).")
+
+    def write(self):
+        head = ["# The reference study as a tilth pipeline: its tables beside tilth's own runs",
+                "",
+                "Written by `sweeps/li2022/pipeline.py`. Every number on tilth's side comes from "
+                "the runs under this directory; the study's numbers from "
+                "`sweeps/li2022/data/` (its tables as CSV)."]
+        (self.out / "report.md").write_text("\n".join(head + self.report) + "\n")
+        print(f"report: {self.out / 'report.md'}", file=sys.stderr)
+
+
+def set_pair_key(model, pair, key, value):
+    """Replaces `key = ...` (one line) inside `[pairs.PAIR]` of a model file."""
+    section = re.search(rf"^\[pairs\.{re.escape(pair)}\]\n(.*?)(?=^\[)", model, re.S | re.M)
+    if not section:
+        sys.exit(f"pipeline: models/li2022.toml has no [pairs.{pair}]")
+    body = section.group(1)
+    new, n = re.subn(rf"^{key}\s*=.*$(\n[ \t]+#.*$)*", f"{key} = {value}", body, count=1, flags=re.M)
+    if n != 1:
+        sys.exit(f"pipeline: [pairs.{pair}] has no `{key}`")
+    return model[:section.start(1)] + new + model[section.end(1):]
+
+
+def fmt(v):
+    if v is None or v == "":
+        return "-"
+    try:
+        return f"{float(v):.2f}"
+    except ValueError:
+        return str(v)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out", help="output directory")
+    ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--replicates", type=int, default=10,
+                    help="seeds per moisture in the validation runs")
+    ap.add_argument("--tilth", default=shutil.which("tilth") or "tilth")
+    args = ap.parse_args()
+    pipe = Pipeline(args)
+    pipe.screening()
+    nxt = pipe.steepest_ascent()
+    pipe.box_behnken(nxt)
+    chosen = pipe.solve(nxt)
+    pipe.validate(chosen)
+    pipe.write()
+
+
+if __name__ == "__main__":
+    main()
