@@ -97,7 +97,7 @@ class Pipeline:
         self.p("| run | x1..x7 (coded) | study, deg | tilth, deg | tilth status |")
         self.p("|---|---|---|---|---|")
         for s, t in zip(study, rows):
-            coded = " ".join(f"{float(s[f]):+.0f}" for f in FACTORS7)
+            coded = " ".join(sign(s[f]) for f in FACTORS7)
             self.p(f"| {s['run']} | {coded} | {float(s['repose_angle_deg']):.2f} | "
                    f"{fmt(t.get('repose_angle_deg'))} | {t['status']} |")
         self.p()
@@ -148,11 +148,14 @@ class Pipeline:
         text = (HERE / "bbd.toml").read_text()
         text = text.replace('scene = "../experiments/repose.toml"',
                             f'scene = "{(HERE.parent / "experiments" / "repose.toml").as_posix()}"')
+        blocks = text.split("[[factors]]")
         for f, lo, hi in zip(nxt["factors"], nxt["low"], nxt["high"]):
-            pattern = re.compile(rf'(name = "{f}"\n(?:[^\[]*?\n)*?)low = [^\n]*\nhigh = [^\n]*')
-            text, n = pattern.subn(rf"\g<1>low = {lo:.6g}\nhigh = {hi:.6g}", text, count=1)
-            if n != 1:
-                sys.exit(f"pipeline: could not set the range of {f} in bbd.toml")
+            mine = [i for i, b in enumerate(blocks) if re.search(rf'^name = "{f}"$', b, re.M)]
+            if len(mine) != 1:
+                sys.exit(f"pipeline: bbd.toml has no factor `{f}`")
+            b = re.sub(r"^low = .*$", f"low = {lo:.6g}", blocks[mine[0]], count=1, flags=re.M)
+            blocks[mine[0]] = re.sub(r"^high = .*$", f"high = {hi:.6g}", b, count=1, flags=re.M)
+        text = "[[factors]]".join(blocks)
         bbd = self.out / "bbd.toml"
         bbd.write_text("# Written by pipeline.py: bbd.toml with the ranges `tilth rsm next` chose.\n"
                        + text)
@@ -174,7 +177,7 @@ class Pipeline:
         self.p("|---|---|---|---|---|")
         for i, t in enumerate(rows):
             s = study[i] if i < len(study) else None
-            coded = " ".join(f"{float(s[f + '_coded']):+.0f}" for f in PATH_FACTORS) if s else "0 0 0"
+            coded = " ".join(sign(s[f + "_coded"]) for f in PATH_FACTORS) if s else "0 0 0"
             angle = f"{float(s['repose_angle_deg']):.2f}" if s else "(not printed)"
             self.p(f"| {i + 1} | {coded} | {angle} | {fmt(t.get('repose_angle_deg'))} | {t['status']} |")
         self.p()
@@ -257,16 +260,21 @@ class Pipeline:
         model = set_pair_key(model, "soil-steel", "friction", "0.85")
         model = set_pair_key(model, "soil-steel", "rolling_friction", "0.225")
         path = self.out / "model.toml"
-        path.write_text("# Written by sweeps/li2022/pipeline.py: models/li2022.toml with the "
-                        "pipeline's calibrated\n# soil-soil rolling friction and surface energy "
-                        "per moisture.\n" + model)
+        model = ("# Written by sweeps/li2022/pipeline.py: models/li2022.toml with the "
+                 "pipeline's calibrated\n# soil-soil rolling friction and surface energy "
+                 "per moisture.\n" + model)
+        # The same model as last time and its validation finished: keep it (resuming).
+        done = (path.exists() and path.read_text() == model
+                and (self.out / "validation" / "compare.json").exists())
+        path.write_text(model)
         coarse = "--coarse" if '"coarse" = true' in (HERE / "pb.toml").read_text() else None
         argv = ["compare", "--model", path, "--data", REPO / "data" / "li2022" / "measurements.csv",
                 "--tests", "repose", "--replicates", self.replicates, "--cores", self.cores,
                 "--out", self.out / "validation", "--quiet"]
         if coarse:
             argv.append(coarse)
-        self.run(*argv)
+        if not done:
+            self.run(*argv)
         rows = json.loads((self.out / "validation" / "compare.json").read_text())["rows"]
         study = {int(r["moisture_pct"]): r for r in read_csv(DATA / "table11_calibrated_contact.csv")}
         self.h("Validation: the calibrated model's funnel test against table 1")
@@ -299,7 +307,10 @@ class Pipeline:
                 "Written by `sweeps/li2022/pipeline.py`. Every number on tilth's side comes from "
                 "the runs under this directory; the study's numbers from "
                 "`sweeps/li2022/data/` (its tables as CSV)."]
-        (self.out / "report.md").write_text("\n".join(head + self.report) + "\n")
+        text = "\n".join(head + self.report) + "\n"
+        # Paths relative to the repository, so that the report reads the same anywhere.
+        text = text.replace(str(REPO) + "/", "")
+        (self.out / "report.md").write_text(text)
         print(f"report: {self.out / 'report.md'}", file=sys.stderr)
 
 
@@ -313,6 +324,12 @@ def set_pair_key(model, pair, key, value):
     if n != 1:
         sys.exit(f"pipeline: [pairs.{pair}] has no `{key}`")
     return model[:section.start(1)] + new + model[section.end(1):]
+
+
+def sign(v):
+    """A coded level as Design-Expert prints it: -1, 0, +1."""
+    x = float(v)
+    return "0" if x == 0 else f"{x:+.0f}"
 
 
 def fmt(v):

@@ -94,6 +94,25 @@ pub struct Param {
     pub high: f64,
 }
 
+/// A free parameter's value form in the model: `[pairs.PAIR]` first, then
+/// `[bond.pairs.PAIR]` (bond stiffness and strength, for the direct shear and UCS tests). The
+/// lab puts both into the scene's pair table, which is where the runs set it.
+pub fn param_form<'m>(model: &'m Model, p: &Param) -> Option<&'m toml::Value> {
+    model
+        .file
+        .pairs
+        .get(&p.pair)
+        .and_then(|t| t.get(&p.key))
+        .or_else(|| {
+            model
+                .file
+                .bond
+                .as_ref()
+                .and_then(|b| b.pairs.get(&p.pair))
+                .and_then(|t| t.get(&p.key))
+        })
+}
+
 pub fn parse_param(s: &str) -> Result<Param> {
     let bad = || {
         anyhow!(
@@ -188,18 +207,14 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     let model_path = std::path::absolute(&args.model)?;
     let model = Model::load(&model_path)?;
     for p in &params {
-        if model
-            .file
-            .pairs
-            .get(&p.pair)
-            .and_then(|t| t.get(&p.key))
-            .is_none()
-        {
+        if param_form(&model, p).is_none() {
             bail!(
-                "--param {}.{}: the model {} has no pairs.{}.{}",
+                "--param {}.{}: the model {} has no pairs.{}.{} (nor bond.pairs.{}.{})",
                 p.pair,
                 p.key,
                 args.model.display(),
+                p.pair,
+                p.key,
                 p.pair,
                 p.key
             );
@@ -348,7 +363,7 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         .with_context(|| format!("{origin}: {} of {} runs finished", ok.len(), mine.len()))?;
         let start: Vec<f64> = params
             .iter()
-            .map(|p| evaluate(&model.file.pairs[&p.pair][&p.key], &conds))
+            .map(|p| evaluate(param_form(&model, p).expect("checked above"), &conds))
             .collect::<Result<_>>()?;
         let solution = rsm::solve(&fit, &describe(&conds), m.value, &[])?;
         let zs = fit.coding.code(&start);

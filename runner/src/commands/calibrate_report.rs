@@ -78,9 +78,27 @@ pub fn write_model(
                     .join(", ")
             ),
         };
-        let pair = doc["pairs"][&p.pair]
-            .as_table_like_mut()
-            .ok_or_else(|| anyhow!("{}: no [pairs.{}]", from.display(), p.pair))?;
+        // Where the starting model has it: `[pairs.PAIR]`, else `[bond.pairs.PAIR]`.
+        let in_pairs = doc
+            .get("pairs")
+            .and_then(|t| t.get(&p.pair))
+            .and_then(|t| t.get(&p.key))
+            .is_some();
+        let in_bond = doc
+            .get("bond")
+            .and_then(|t| t.get("pairs"))
+            .and_then(|t| t.get(&p.pair))
+            .and_then(|t| t.get(&p.key))
+            .is_some();
+        let pair = if in_bond && !in_pairs {
+            doc["bond"]["pairs"][&p.pair]
+                .as_table_like_mut()
+                .ok_or_else(|| anyhow!("{}: no [bond.pairs.{}]", from.display(), p.pair))?
+        } else {
+            doc["pairs"][&p.pair]
+                .as_table_like_mut()
+                .ok_or_else(|| anyhow!("{}: no [pairs.{}]", from.display(), p.pair))?
+        };
         let mut item = toml_edit::value(value);
         if let Some(v) = item.as_value_mut() {
             v.decor_mut().set_suffix(format!(

@@ -115,3 +115,82 @@ fn calibrate_repose_at_one_moisture() {
         String::from_utf8_lossy(&run.stderr)
     );
 }
+
+/// A bond parameter (in the model's `[bond.pairs]`) calibrated against the UCS at one
+/// condition: the runs set it in the specimen's scene and the calibrated model carries it in
+/// `[bond.pairs.soil-soil]`, leaving `[pairs.soil-soil]` as it was.
+#[test]
+fn calibrate_a_bond_strength_against_the_ucs() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-ucs");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = tilth(&[
+        "calibrate",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        "data/li2022/measurements.csv",
+        "--test",
+        "ucs",
+        "--param",
+        "soil-soil.normal_stiffness_per_area=5e7:1e9",
+        "--seeds",
+        "1",
+        "--refine",
+        "0",
+        "--coarse",
+        "--where",
+        "moisture_pct=6",
+        "--where",
+        "firmness_mpa=1.55",
+        "--cores",
+        "2",
+        "--quiet",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("calibration.json")).unwrap())
+            .unwrap();
+    let c = &v["conditions"][0];
+    assert_eq!(c["measured"], 259.13);
+    // Three levels plus two centre points, one seed each.
+    assert_eq!(c["surface_runs"], 5);
+    // The starting value is the model's: table 3's stiffness at 6 %, 1.55 MPa.
+    assert_eq!(c["start"][0], 1.07e8);
+    let model: toml::Table = std::fs::read_to_string(dir.join("model.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let bond = &model["bond"]["pairs"]["soil-soil"]["normal_stiffness_per_area"];
+    assert_eq!(bond.as_float(), c["calibrated"][0].as_f64());
+    assert!(
+        model["pairs"]["soil-soil"]
+            .get("normal_stiffness_per_area")
+            .is_none()
+    );
+    // A key in neither table is refused by name.
+    let bad = tilth(&[
+        "calibrate",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        "data/li2022/measurements.csv",
+        "--test",
+        "ucs",
+        "--param",
+        "soil-soil.bond_strength=1:2",
+        "--out",
+        dir.join("bad").to_str().unwrap(),
+    ]);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("no pairs.soil-soil.bond_strength (nor bond.pairs.soil-soil.bond_strength)"),
+        "{err}"
+    );
+}
