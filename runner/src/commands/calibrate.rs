@@ -48,9 +48,15 @@ pub struct CalibrateArgs {
     /// Measurements (CSV), e.g. data/li2022/measurements.csv.
     #[arg(long)]
     pub data: PathBuf,
-    /// The test whose measurements to fit: repose, direct_shear or ucs.
+    /// The test whose measurements to fit: repose, direct_shear or ucs (with `--joint`,
+    /// several, comma-separated: `repose,ucs`).
     #[arg(long)]
     pub test: String,
+    /// One value per parameter shared by every selected measurement (all conditions, all
+    /// tests), fitted to all of them at once by weighted least squares, instead of one value
+    /// per condition.
+    #[arg(long)]
+    pub joint: bool,
     /// A free parameter and its range: `PAIR.KEY=LOW:HIGH`, e.g.
     /// `soil-soil.rolling_friction=0.05:0.45` (repeatable).
     #[arg(long = "param", required = true)]
@@ -181,24 +187,17 @@ pub struct Iteration {
 }
 
 pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
+    if args.joint {
+        check_counts(args)?;
+        return super::calibrate_joint::joint(args, out);
+    }
     if !["repose", "direct_shear", "ucs"].contains(&args.test.as_str()) {
         bail!(
             "--test {}: unknown, allowed repose, direct_shear, ucs",
             args.test
         );
     }
-    if args.check_seeds == Some(0) {
-        bail!("--check-seeds 0 is out of range: allowed 1 or more");
-    }
-    if args.seeds == 0 {
-        bail!("--seeds 0 is out of range: allowed 1 or more");
-    }
-    if !(args.tolerance > 0.0) {
-        bail!(
-            "--tolerance {} is out of range: allowed > 0 (percent)",
-            args.tolerance
-        );
-    }
+    check_counts(args)?;
     let params: Vec<Param> = args
         .params
         .iter()
@@ -603,6 +602,22 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     let md = calibrate_report::markdown(args, &params, &results_out);
     std::fs::write(args.out.join("calibration.md"), &md)?;
     write!(out, "{md}")?;
+    Ok(())
+}
+
+fn check_counts(args: &CalibrateArgs) -> Result<()> {
+    if args.check_seeds == Some(0) {
+        bail!("--check-seeds 0 is out of range: allowed 1 or more");
+    }
+    if args.seeds == 0 {
+        bail!("--seeds 0 is out of range: allowed 1 or more");
+    }
+    if !(args.tolerance > 0.0) {
+        bail!(
+            "--tolerance {} is out of range: allowed > 0 (percent)",
+            args.tolerance
+        );
+    }
     Ok(())
 }
 

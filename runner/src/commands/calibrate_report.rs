@@ -78,37 +78,66 @@ pub fn write_model(
                     .join(", ")
             ),
         };
-        // Where the starting model has it: `[pairs.PAIR]`, else `[bond.pairs.PAIR]`.
-        let in_pairs = doc
-            .get("pairs")
-            .and_then(|t| t.get(&p.pair))
-            .and_then(|t| t.get(&p.key))
-            .is_some();
-        let in_bond = doc
-            .get("bond")
-            .and_then(|t| t.get("pairs"))
-            .and_then(|t| t.get(&p.pair))
-            .and_then(|t| t.get(&p.key))
-            .is_some();
-        let pair = if in_bond && !in_pairs {
-            doc["bond"]["pairs"][&p.pair]
-                .as_table_like_mut()
-                .ok_or_else(|| anyhow!("{}: no [bond.pairs.{}]", from.display(), p.pair))?
-        } else {
-            doc["pairs"][&p.pair]
-                .as_table_like_mut()
-                .ok_or_else(|| anyhow!("{}: no [pairs.{}]", from.display(), p.pair))?
-        };
-        let mut item = toml_edit::value(value);
-        if let Some(v) = item.as_value_mut() {
-            v.decor_mut().set_suffix(format!(
-                "  # calibrated by tilth calibrate ({})",
-                chrono_free_note()
-            ));
-        }
-        pair.insert(&p.key, item);
+        set(&mut doc, from, p, value, "tilth calibrate")?;
     }
     std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
+}
+
+/// The starting model with each parameter set to one value (a joint calibration), written
+/// where the model has it (`[pairs.PAIR]`, else `[bond.pairs.PAIR]`); everything else kept.
+pub fn write_constants(from: &Path, to: &Path, params: &[Param], values: &[f64]) -> Result<()> {
+    let text = std::fs::read_to_string(from)
+        .with_context(|| format!("{}: cannot read", from.display()))?;
+    let mut doc: toml_edit::DocumentMut = text
+        .parse()
+        .with_context(|| format!("{}: not TOML", from.display()))?;
+    for (p, v) in params.iter().zip(values) {
+        set(
+            &mut doc,
+            from,
+            p,
+            toml_edit::Value::from((v * 1e6).round() / 1e6),
+            "tilth calibrate --joint",
+        )?;
+    }
+    std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
+}
+
+/// Sets `p` to `value` in `[pairs.PAIR]` or, where only that has it, `[bond.pairs.PAIR]`.
+fn set(
+    doc: &mut toml_edit::DocumentMut,
+    from: &Path,
+    p: &Param,
+    value: toml_edit::Value,
+    by: &str,
+) -> Result<()> {
+    let in_pairs = doc
+        .get("pairs")
+        .and_then(|t| t.get(&p.pair))
+        .and_then(|t| t.get(&p.key))
+        .is_some();
+    let in_bond = doc
+        .get("bond")
+        .and_then(|t| t.get("pairs"))
+        .and_then(|t| t.get(&p.pair))
+        .and_then(|t| t.get(&p.key))
+        .is_some();
+    let pair = if in_bond && !in_pairs {
+        doc["bond"]["pairs"][&p.pair]
+            .as_table_like_mut()
+            .ok_or_else(|| anyhow!("{}: no [bond.pairs.{}]", from.display(), p.pair))?
+    } else {
+        doc["pairs"][&p.pair]
+            .as_table_like_mut()
+            .ok_or_else(|| anyhow!("{}: no [pairs.{}]", from.display(), p.pair))?
+    };
+    let mut item = toml_edit::value(value);
+    if let Some(v) = item.as_value_mut() {
+        v.decor_mut()
+            .set_suffix(format!("  # calibrated by {by} ({})", chrono_free_note()));
+    }
+    pair.insert(&p.key, item);
+    Ok(())
 }
 
 fn chrono_free_note() -> String {

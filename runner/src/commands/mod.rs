@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod calibrate;
+pub mod calibrate_joint;
 pub mod calibrate_report;
 pub mod compare;
 pub mod diagnose;

@@ -194,3 +194,118 @@ fn calibrate_a_bond_strength_against_the_ucs() {
         "{err}"
     );
 }
+
+/// Least-squares quadratic a + b x + c x^2 through `pts`, and its residual sd.
+fn quadratic(pts: &[(f64, f64)]) -> ([f64; 3], f64) {
+    let mut m = [[0.0f64; 4]; 3];
+    for &(x, y) in pts {
+        let row = [1.0, x, x * x];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += row[i] * row[j];
+            }
+            m[i][3] += row[i] * y;
+        }
+    }
+    // Gauss-Jordan on the 3 x 3 normal equations.
+    for c in 0..3 {
+        let p = (c..3)
+            .max_by(|a, b| m[*a][c].abs().total_cmp(&m[*b][c].abs()))
+            .unwrap();
+        m.swap(c, p);
+        for r in 0..3 {
+            if r != c {
+                let f = m[r][c] / m[c][c];
+                for k in 0..4 {
+                    m[r][k] -= f * m[c][k];
+                }
+            }
+        }
+    }
+    let coef = [m[0][3] / m[0][0], m[1][3] / m[1][1], m[2][3] / m[2][2]];
+    let f = |x: f64| coef[0] + coef[1] * x + coef[2] * x * x;
+    let sse: f64 = pts.iter().map(|&(x, y)| (y - f(x)).powi(2)).sum();
+    (coef, (sse / (pts.len() as f64 - 3.0)).sqrt())
+}
+
+/// `--joint`: one rolling friction for the four moistures, fitted to all four angles at once. The
+/// calibrated value is checked against an independent weighted least-squares fit of the
+/// same runs (quadratics refitted here, minimised on a fine grid).
+#[test]
+fn joint_calibration_shares_one_value_across_conditions() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-joint");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = tilth(&[
+        "calibrate",
+        "--joint",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        "data/li2022/measurements.csv",
+        "--test",
+        "repose",
+        "--param",
+        "soil-soil.rolling_friction=0.05:0.45",
+        "--seeds",
+        "1",
+        "--refine",
+        "0",
+        "--coarse",
+        "--cores",
+        "2",
+        "--quiet",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("calibration.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["joint"], true);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    let theta = v["calibrated"][0].as_f64().unwrap();
+    assert!((0.05..=0.45).contains(&theta));
+    // The surface's runs, refitted here; sigma is their residual sd (no uncertainty given).
+    let mut fits = vec![];
+    for r in rows {
+        let pts: Vec<(f64, f64)> = r["surface_points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| (p[0][0].as_f64().unwrap(), p[1].as_f64().unwrap()))
+            .collect();
+        assert_eq!(pts.len(), 5);
+        let (coef, sd) = quadratic(&pts);
+        assert!((r["sigma"].as_f64().unwrap() - sd).abs() <= 1e-6 * sd.max(1.0));
+        fits.push((coef, sd, r["measured"].as_f64().unwrap()));
+    }
+    let s = |x: f64| -> f64 {
+        fits.iter()
+            .map(|(c, sd, y)| ((c[0] + c[1] * x + c[2] * x * x - y) / sd).powi(2))
+            .sum()
+    };
+    let best = (0..=40_000)
+        .map(|i| 0.05 + 0.4 * i as f64 / 40_000.0)
+        .min_by(|a, b| s(*a).total_cmp(&s(*b)))
+        .unwrap();
+    assert!(
+        s(theta) <= s(best) + 1e-9 * s(best).max(1e-12),
+        "calibrated {theta} (S = {}) vs grid {best} (S = {})",
+        s(theta),
+        s(best)
+    );
+    // The calibrated model carries the one value as a number.
+    let model: toml::Table = std::fs::read_to_string(dir.join("model.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(
+        model["pairs"]["soil-soil"]["rolling_friction"].as_float(),
+        Some((theta * 1e6).round() / 1e6)
+    );
+}

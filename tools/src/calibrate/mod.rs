@@ -5,7 +5,9 @@
 //! runs directly: a posterior needs tens of thousands of evaluations.
 
 mod jacobian;
+mod least_squares;
 mod smc;
 
 pub use jacobian::{Linearised, linearised};
+pub use least_squares::{gauss_newton_step, minimise_in_box};
 pub use smc::{Posterior, smc};

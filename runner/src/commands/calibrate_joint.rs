@@ -1,0 +1,610 @@
+//! `tilth calibrate --joint`: one value per free parameter, shared by every selected
+//! measurement (several conditions, several tests), fitted to all of them at once.
+//!
+//! 1. **Surfaces.** For each measurement, the same 3^k factorial plus two centre points as
+//!    the per-condition calibration, `--seeds` seeds each, and a quadratic surface f_i(theta).
+//! 2. **Weighted least squares** on the surfaces: minimise sum_i ((f_i(theta) - y_i) /
+//!    sigma_i)^2 over the parameters' ranges, sigma_i^2 = s_i^2 + u_i^2 with s_i the surface's
+//!    residual standard deviation (the scatter of the runs about it) and u_i the measurement's
+//!    uncertainty when the file gives one. Dividing by sigma makes newtons, degrees and
+//!    kilopascals commensurable.
+//! 3. **Refine** with direct runs of every measurement at the shared setting (`--check-seeds`
+//!    seeds, the same ones each time), and Gauss-Newton steps on the surfaces' Jacobian (at
+//!    most a quarter of each range) while any mean misses its measurement by more than
+//!    `--tolerance` %, up to `--refine` times.
+//! 4. **Uncertainty**: linearised intervals from the Jacobian of all the residuals (a ridge is
+//!    reported as such) and an SMC posterior on the surfaces.
+//! 5. **Output**: `calibration.json` (`"joint": true`), `calibration.md`, posterior samples,
+//!    and `model.toml` with each parameter set to its one calibrated value.
+
+use super::calibrate::{CalibrateArgs, Param, describe, param_form, parse_param};
+use super::calibrate_report;
+use super::compare::{
+    Measurement, condition_factors, experiment_text, factor, mean_sd, read_measurements,
+    run_generated,
+};
+use crate::lab::model::{Model, evaluate};
+use crate::sweep::execute;
+use crate::sweep::job::{Status, read_summary, run_dir};
+use crate::sweep::plan::{Factor, Plan, PlannedRun};
+use anyhow::{Context, Result, anyhow, bail};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use tilth_tools::calibrate::{
+    Linearised, Posterior, gauss_newton_step, linearised, minimise_in_box, smc,
+};
+use tilth_tools::rsm::{self, Anova, Data, FitOptions, Order, Table};
+
+const TESTS: [&str; 3] = ["repose", "direct_shear", "ucs"];
+
+/// One measurement in the joint fit.
+#[derive(Debug, Clone, Serialize)]
+pub struct JointRow {
+    pub test: String,
+    pub row: usize,
+    pub conditions: BTreeMap<String, f64>,
+    pub observable: String,
+    pub measured: f64,
+    /// sigma_i: the weight's scale.
+    pub sigma: f64,
+    pub surface_runs: usize,
+    pub surface_failed: usize,
+    pub r2: f64,
+    pub residual_sd: Option<f64>,
+    pub equation: String,
+    /// The surface's design points (parameter values, run value): what the fit saw.
+    pub surface_points: Vec<(Vec<f64>, f64)>,
+    /// The surface at the calibrated setting.
+    pub predicted: f64,
+    pub simulated: Vec<f64>,
+    pub simulated_mean: f64,
+    pub simulated_sd: Option<f64>,
+    pub error_pct: f64,
+    pub error_se_pct: Option<f64>,
+    pub within_tolerance: bool,
+}
+
+/// One refinement: the shared setting and each row's mean there.
+#[derive(Debug, Clone, Serialize)]
+pub struct JointIteration {
+    pub setting: Vec<f64>,
+    pub means: Vec<f64>,
+    pub error_pct: Vec<f64>,
+}
+
+pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
+    let tests: Vec<&str> = args.test.split(',').map(str::trim).collect();
+    if let Some(t) = tests.iter().find(|t| !TESTS.contains(t)) {
+        bail!(
+            "--test {t}: unknown, allowed repose, direct_shear, ucs (comma-separated with --joint)"
+        );
+    }
+    let params: Vec<Param> = args
+        .params
+        .iter()
+        .map(|p| parse_param(p))
+        .collect::<Result<_>>()?;
+    let model_path = std::path::absolute(&args.model)?;
+    let model = Model::load(&model_path)?;
+    for p in &params {
+        if param_form(&model, p).is_none() {
+            bail!(
+                "--param {}.{}: the model {} has no pairs.{}.{} (nor bond.pairs.{}.{})",
+                p.pair,
+                p.key,
+                args.model.display(),
+                p.pair,
+                p.key,
+                p.pair,
+                p.key
+            );
+        }
+    }
+    let all = read_measurements(&args.data)?;
+    super::measurements::check_against_model(&all, &model, &args.data)?;
+    let mut rows: Vec<Measurement> = all
+        .into_iter()
+        .filter(|m| tests.contains(&m.test.as_str()))
+        .collect();
+    for f in &args.filters {
+        let (k, v) = f
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--where {f:?}: expected NAME=VALUE"))?;
+        let v: f64 = v
+            .trim()
+            .parse()
+            .map_err(|_| anyhow!("--where {f:?}: {v:?} is not a number"))?;
+        rows.retain(|m| m.conditions.get(k.trim()) == Some(&v));
+    }
+    if rows.is_empty() {
+        bail!(
+            "{}: no {} measurement to calibrate against",
+            args.data.display(),
+            args.test
+        );
+    }
+    let stop = execute::stop_on_signals()?;
+    let k = params.len();
+    let real = |p: &Param, z: f64| 0.5 * (p.low + p.high) + z * 0.5 * (p.high - p.low);
+    let mut grid: Vec<Vec<f64>> = (0..3usize.pow(k as u32))
+        .map(|mut g| {
+            (0..k)
+                .map(|_| {
+                    let v = (g % 3) as f64 - 1.0;
+                    g /= 3;
+                    v
+                })
+                .collect()
+        })
+        .collect();
+    grid.push(vec![0.0; k]);
+    grid.push(vec![0.0; k]);
+
+    // 1. Surfaces, one plan per test.
+    let mut fits: Vec<(Measurement, Anova, Vec<(Vec<f64>, f64)>, usize)> = vec![];
+    for test in &tests {
+        let mine: Vec<&Measurement> = rows.iter().filter(|m| m.test == *test).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let mut runs = vec![];
+        for m in &mine {
+            for (g, z) in grid.iter().enumerate() {
+                let first_seed = 1 + g.saturating_sub(grid.len() - 3) * args.seeds;
+                for s in 0..args.seeds {
+                    let mut values = cond_values(test, m, &args.data)?;
+                    for (p, zi) in params.iter().zip(z) {
+                        values.insert(p.name.clone(), real(p, *zi));
+                    }
+                    runs.push(PlannedRun {
+                        id: runs.len() + 1,
+                        std: m.row,
+                        replicate: s + 1,
+                        coded: params
+                            .iter()
+                            .zip(z)
+                            .map(|(p, v)| (p.name.clone(), *v))
+                            .collect(),
+                        values,
+                        seed: (first_seed + s) as u64,
+                    });
+                }
+            }
+        }
+        let plan = Plan::generated(
+            &format!("{test}-surface"),
+            experiment_text(test, &model_path, args.coarse),
+            Path::new("."),
+            factors(test, &params),
+            runs,
+        )?;
+        let values = run_and_read(
+            &plan,
+            &args.out.join(format!("surface-{test}")),
+            &rows,
+            args,
+            &stop,
+        )?;
+        for m in mine {
+            let pts: Vec<(Vec<f64>, f64)> = plan
+                .runs
+                .iter()
+                .zip(&values)
+                .filter(|(r, _)| r.std == m.row)
+                .filter_map(|(r, v)| {
+                    v.map(|v| (params.iter().map(|p| r.values[&p.name]).collect(), v))
+                })
+                .collect();
+            let total = plan.runs.iter().filter(|r| r.std == m.row).count();
+            let fit = surface(&params, m, &pts, total)?;
+            fits.push((m.clone(), fit, pts, total));
+        }
+    }
+    let sigma: Vec<f64> = fits
+        .iter()
+        .map(|(m, fit, _, _)| {
+            let s = fit.std_dev.unwrap_or(0.0);
+            let u = m.uncertainty.unwrap_or(0.0);
+            (s * s + u * u).sqrt().max(1e-6 * m.value.abs())
+        })
+        .collect();
+    let residuals = |t: &[f64]| -> Vec<f64> {
+        fits.iter()
+            .zip(&sigma)
+            .map(|((m, fit, _, _), s)| (fit.predict(t) - m.value) / s)
+            .collect()
+    };
+    let sum_sq = |t: &[f64]| residuals(t).iter().map(|r| r * r).sum::<f64>();
+    let low: Vec<f64> = params.iter().map(|p| p.low).collect();
+    let high: Vec<f64> = params.iter().map(|p| p.high).collect();
+
+    // 2. The shared setting on the surfaces.
+    let mut setting = minimise_in_box(sum_sq, &low, &high);
+    if !args.quiet {
+        eprintln!(
+            "joint least squares on {} surfaces: ({})",
+            fits.len(),
+            fmt(&setting)
+        );
+    }
+
+    // 3. Direct runs at the shared setting, Gauss-Newton on the surfaces between them.
+    let n_check = args.check_seeds.unwrap_or(args.seeds);
+    let mut iterations: Vec<JointIteration> = vec![];
+    let mut last_values: Vec<Vec<f64>> = vec![];
+    for it in 0..=args.refine {
+        let mut per_row: Vec<Vec<f64>> = vec![vec![]; fits.len()];
+        for test in &tests {
+            let idx: Vec<usize> = (0..fits.len())
+                .filter(|i| fits[*i].0.test == *test)
+                .collect();
+            if idx.is_empty() {
+                continue;
+            }
+            let mut runs = vec![];
+            for &i in &idx {
+                for s in 0..n_check {
+                    let mut values = cond_values(test, &fits[i].0, &args.data)?;
+                    for (p, v) in params.iter().zip(&setting) {
+                        values.insert(p.name.clone(), *v);
+                    }
+                    runs.push(PlannedRun {
+                        id: runs.len() + 1,
+                        std: fits[i].0.row,
+                        replicate: s + 1,
+                        coded: BTreeMap::new(),
+                        values,
+                        seed: 1001 + s as u64,
+                    });
+                }
+            }
+            let plan = Plan::generated(
+                &format!("{test}-check-{it}"),
+                experiment_text(test, &model_path, args.coarse),
+                Path::new("."),
+                factors(test, &params),
+                runs,
+            )?;
+            let dir = args.out.join(format!("check-{it}-{test}"));
+            let values = run_and_read(&plan, &dir, &rows, args, &stop)?;
+            for &i in &idx {
+                per_row[i] = plan
+                    .runs
+                    .iter()
+                    .zip(&values)
+                    .filter(|(r, _)| r.std == fits[i].0.row)
+                    .filter_map(|(_, v)| *v)
+                    .collect();
+                if per_row[i].is_empty() {
+                    bail!(
+                        "{} at {}: every run at the shared setting failed (see {})",
+                        test,
+                        describe(&fits[i].0.conditions),
+                        dir.display()
+                    );
+                }
+            }
+        }
+        let means: Vec<f64> = per_row.iter().map(|v| mean_sd(v).0).collect();
+        let errors: Vec<f64> = fits
+            .iter()
+            .zip(&means)
+            .map(|((m, ..), mean)| 100.0 * (mean - m.value) / m.value)
+            .collect();
+        iterations.push(JointIteration {
+            setting: setting.clone(),
+            means: means.clone(),
+            error_pct: errors.clone(),
+        });
+        last_values = per_row;
+        if errors.iter().all(|e| e.abs() <= args.tolerance) || it == args.refine {
+            break;
+        }
+        // Gauss-Newton on the surfaces' Jacobian with the direct runs' residuals.
+        let jac: Vec<Vec<f64>> = fits
+            .iter()
+            .zip(&sigma)
+            .map(|((_, fit, _, _), s)| {
+                let z = fit.coding.code(&setting);
+                fit.gradient_coded(&z)
+                    .iter()
+                    .enumerate()
+                    .map(|(j, d)| d / fit.coding.half(j) / s)
+                    .collect()
+            })
+            .collect();
+        let r: Vec<f64> = fits
+            .iter()
+            .zip(&sigma)
+            .zip(&means)
+            .map(|(((m, ..), s), mean)| (mean - m.value) / s)
+            .collect();
+        let step = gauss_newton_step(&jac, &r);
+        let worst = step
+            .iter()
+            .zip(&params)
+            .map(|(d, p)| d.abs() / (0.25 * (p.high - p.low)))
+            .fold(1.0, f64::max);
+        setting = setting
+            .iter()
+            .zip(&step)
+            .zip(&params)
+            .map(|((x, d), p)| (x + d / worst).clamp(p.low, p.high))
+            .collect();
+    }
+    let setting = iterations
+        .last()
+        .expect("one iteration at least")
+        .setting
+        .clone();
+
+    // 4. Uncertainty on the surfaces.
+    let lin: Linearised = linearised(
+        residuals,
+        &setting,
+        &params
+            .iter()
+            .map(|p| 1e-4 * (p.high - p.low))
+            .collect::<Vec<_>>(),
+    );
+    let post: Posterior = smc(|t| -0.5 * sum_sq(t), &low, &high, 2000, 17);
+    std::fs::create_dir_all(&args.out)?;
+    calibrate_report::write_samples(&args.out.join("posterior.csv"), &params, &post)?;
+
+    // 5. Outputs.
+    let rows_out: Vec<JointRow> = fits
+        .iter()
+        .zip(&sigma)
+        .zip(&last_values)
+        .map(|(((m, fit, pts, total), s), values)| {
+            let (mean, sd) = mean_sd(values);
+            let error_pct = 100.0 * (mean - m.value) / m.value;
+            JointRow {
+                test: m.test.clone(),
+                row: m.row,
+                conditions: m.conditions.clone(),
+                observable: m.observable.clone(),
+                measured: m.value,
+                sigma: *s,
+                surface_runs: *total,
+                surface_failed: total - pts.len(),
+                r2: fit.r2,
+                residual_sd: fit.std_dev,
+                equation: fit.equation_real.clone(),
+                surface_points: pts.clone(),
+                predicted: fit.predict(&setting),
+                simulated: values.clone(),
+                simulated_mean: mean,
+                simulated_sd: sd,
+                error_pct,
+                error_se_pct: sd
+                    .map(|sd| 100.0 * sd / (values.len() as f64).sqrt() / m.value.abs()),
+                within_tolerance: error_pct.abs() <= args.tolerance,
+            }
+        })
+        .collect();
+    let model_out = args.out.join("model.toml");
+    calibrate_report::write_constants(&model_path, &model_out, &params, &setting)?;
+    let start: Vec<Option<f64>> = params
+        .iter()
+        .map(|p| {
+            let form = param_form(&model, p).expect("checked above");
+            rows.first()
+                .and_then(|m| evaluate(form, &m.conditions).ok())
+        })
+        .collect();
+    let json = serde_json::json!({
+        "joint": true,
+        "tests": tests,
+        "model": args.model,
+        "coarse": args.coarse,
+        "seeds": args.seeds,
+        "check_seeds": n_check,
+        "tolerance_pct": args.tolerance,
+        "params": params,
+        "start": start,
+        "calibrated": setting,
+        "objective": sum_sq(&setting),
+        "iterations": iterations,
+        "rows": rows_out,
+        "linearised": lin,
+        "posterior": post,
+        "calibrated_model": model_out,
+    });
+    std::fs::write(
+        args.out.join("calibration.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    let md = markdown(args, &params, &setting, &rows_out, &iterations, &lin, &post);
+    std::fs::write(args.out.join("calibration.md"), &md)?;
+    write!(out, "{md}")?;
+    Ok(())
+}
+
+fn factors(test: &str, params: &[Param]) -> Vec<Factor> {
+    let mut f = condition_factors(test);
+    for p in params {
+        let mut x = factor(&p.name, &format!("scene:pairs[{}].{}", p.pair, p.key));
+        x.low = p.low;
+        x.high = p.high;
+        f.push(x);
+    }
+    f
+}
+
+fn cond_values(test: &str, m: &Measurement, data: &Path) -> Result<BTreeMap<String, f64>> {
+    condition_factors(test)
+        .iter()
+        .map(|f| {
+            m.conditions
+                .get(&f.name)
+                .map(|v| (f.name.clone(), *v))
+                .ok_or_else(|| {
+                    anyhow!(
+                        "{}:{}: a {test} row needs `{}`",
+                        data.display(),
+                        m.row,
+                        f.name
+                    )
+                })
+        })
+        .collect()
+}
+
+/// A quadratic surface of one measurement's observable over the parameters.
+fn surface(
+    params: &[Param],
+    m: &Measurement,
+    pts: &[(Vec<f64>, f64)],
+    total: usize,
+) -> Result<Anova> {
+    let mut columns: Vec<(&str, Vec<f64>)> = params
+        .iter()
+        .enumerate()
+        .map(|(j, p)| (p.name.as_str(), pts.iter().map(|(x, _)| x[j]).collect()))
+        .collect();
+    columns.push((m.observable.as_str(), pts.iter().map(|(_, v)| *v).collect()));
+    let origin = format!("{} surface at {}", m.test, describe(&m.conditions));
+    let table = Table::from_columns(&origin, &columns);
+    let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
+    let ranges: Vec<(f64, f64)> = params.iter().map(|p| (p.low, p.high)).collect();
+    let data = Data::from_table(&table, &names, &m.observable, Some(&ranges))?;
+    rsm::fit(
+        &data,
+        FitOptions {
+            order: Order::Quadratic,
+            curvature: false,
+            backward: None,
+        },
+    )
+    .with_context(|| format!("{origin}: {} of {total} runs finished", pts.len()))
+}
+
+/// Runs `plan` into `dir`; each run's value of its measurement's observable.
+fn run_and_read(
+    plan: &Plan,
+    dir: &Path,
+    rows: &[Measurement],
+    args: &CalibrateArgs,
+    stop: &Arc<AtomicBool>,
+) -> Result<Vec<Option<f64>>> {
+    run_generated(plan, dir, args.cores, args.quiet, stop)?;
+    Ok(plan
+        .runs
+        .iter()
+        .map(|r| {
+            let observable = &rows.iter().find(|m| m.row == r.std)?.observable;
+            let s = read_summary(&run_dir(dir, r.id))?;
+            if s.status != Status::Done {
+                return None;
+            }
+            s.reduced.as_ref()?.get(observable)?.as_f64()
+        })
+        .collect())
+}
+
+fn fmt(x: &[f64]) -> String {
+    x.iter()
+        .map(|v| format!("{v:.4}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn markdown(
+    args: &CalibrateArgs,
+    params: &[Param],
+    setting: &[f64],
+    rows: &[JointRow],
+    iterations: &[JointIteration],
+    lin: &Linearised,
+    post: &Posterior,
+) -> String {
+    let mut s = format!(
+        "# Joint calibration of {} against {}\n\n{} free parameter(s) shared by all {} measurements: {}; \
+         {} seeds per surface setting, {} per check; tolerance {} %{}.\n\n\
+         Weighted least squares on one quadratic surface per measurement, each residual divided by \
+         sigma = sqrt(surface residual sd^2 + measurement uncertainty^2).\n\n",
+        args.test,
+        args.data.display(),
+        params.len(),
+        rows.len(),
+        params
+            .iter()
+            .map(|p| format!("{}.{} in [{}, {}]", p.pair, p.key, p.low, p.high))
+            .collect::<Vec<_>>()
+            .join(", "),
+        args.seeds,
+        args.check_seeds.unwrap_or(args.seeds),
+        args.tolerance,
+        if args.coarse { "; coarse preset" } else { "" }
+    );
+    s += &format!(
+        "**Calibrated: {}** after {} round(s) of direct runs.\n\n",
+        params
+            .iter()
+            .zip(setting)
+            .map(|(p, v)| format!("{} = {v:.6}", p.name))
+            .collect::<Vec<_>>()
+            .join(", "),
+        iterations.len()
+    );
+    s += "| test | conditions | measured | sigma | surface R^2 | predicted | simulated (mean +- sd) | error +- s.e. | within |\n|---|---|---|---|---|---|---|---|---|\n";
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {:.3} | {:.3} | {:.2} | {:.2} +- {} (n={}) | {:+.2} +- {} % | {} |\n",
+            r.test,
+            describe(&r.conditions),
+            r.measured,
+            r.sigma,
+            r.r2,
+            r.predicted,
+            r.simulated_mean,
+            r.simulated_sd.map_or("-".into(), |v| format!("{v:.2}")),
+            r.simulated.len(),
+            r.error_pct,
+            r.error_se_pct.map_or("-".into(), |v| format!("{v:.2}")),
+            if r.within_tolerance { "yes" } else { "NO" }
+        );
+    }
+    s += "\n";
+    for (k, it) in iterations.iter().enumerate() {
+        s += &format!(
+            "- round {k}: setting ({}), errors {} %\n",
+            fmt(&it.setting),
+            it.error_pct
+                .iter()
+                .map(|e| format!("{e:+.2}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    if lin.rank < params.len() {
+        s += &format!(
+            "- linearised: the measurements fix {} of {} parameter combinations; the parameters trade off along ({}) without changing the fit\n",
+            lin.rank,
+            params.len(),
+            lin.null_directions
+                .first()
+                .map_or(String::new(), |d| fmt(d))
+        );
+    } else if let Some(ci) = &lin.ci95 {
+        for (p, (a, b)) in params.iter().zip(ci) {
+            s += &format!("- {}: linearised 95 % interval [{a:.6}, {b:.6}]\n", p.name);
+        }
+    }
+    s += &format!(
+        "- posterior (SMC, {} stages): {}\n",
+        post.stages,
+        params
+            .iter()
+            .enumerate()
+            .map(|(i, p)| format!("{} 95 % [{:.4}, {:.4}]", p.name, post.q025[i], post.q975[i]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    s
+}
