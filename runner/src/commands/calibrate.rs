@@ -191,6 +191,12 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         check_counts(args)?;
         return super::calibrate_joint::joint(args, out);
     }
+    if args.test.contains(',') {
+        bail!(
+            "--test {}: several tests are calibrated together only with --joint (one value per parameter across them)",
+            args.test
+        );
+    }
     if !["repose", "direct_shear", "ucs"].contains(&args.test.as_str()) {
         bail!(
             "--test {}: unknown, allowed repose, direct_shear, ucs",
