@@ -329,12 +329,24 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             .zip(&params)
             .map(|(d, p)| d.abs() / (0.25 * (p.high - p.low)))
             .fold(1.0, f64::max);
-        setting = setting
+        let next: Vec<f64> = setting
             .iter()
             .zip(&step)
             .zip(&params)
             .map(|((x, d), p)| (x + d / worst).clamp(p.low, p.high))
             .collect();
+        // Pinned at the ranges' edges (or a zero step): more runs there would only repeat
+        // these.
+        if next == setting {
+            if !args.quiet {
+                eprintln!(
+                    "the step stays at ({}): the ranges' edge; refinement stops",
+                    fmt(&setting)
+                );
+            }
+            break;
+        }
+        setting = next;
     }
     let setting = iterations
         .last()
