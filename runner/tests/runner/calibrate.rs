@@ -120,7 +120,7 @@ fn calibrate_repose_at_one_moisture() {
 /// condition: the runs set it in the specimen's scene and the calibrated model carries it in
 /// `[bond.pairs.soil-soil]`, leaving `[pairs.soil-soil]` as it was.
 #[test]
-fn calibrate_a_bond_strength_against_the_ucs() {
+fn calibrate_a_bond_stiffness_against_the_ucs() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-ucs");
     let _ = std::fs::remove_dir_all(&dir);
     let out = tilth(&[
