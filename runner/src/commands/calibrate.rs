@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use tilth_tools::calibrate::{Linearised, Posterior, linearised, smc};
-use tilth_tools::rsm::{self, Data, FitOptions, Order, Table};
+use tilth_tools::rsm::{self, Anova, Data, FitOptions, Order, Table};
 
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
@@ -204,93 +204,16 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     check_counts(args)?;
-    let params: Vec<Param> = args
-        .params
-        .iter()
-        .map(|p| parse_param(p))
-        .collect::<Result<_>>()?;
-    let model_path = std::path::absolute(&args.model)?;
-    let model = Model::load(&model_path)?;
-    for p in &params {
-        if param_form(&model, p).is_none() {
-            bail!(
-                "--param {}.{}: the model {} has no pairs.{}.{} (nor bond.pairs.{}.{})",
-                p.pair,
-                p.key,
-                args.model.display(),
-                p.pair,
-                p.key,
-                p.pair,
-                p.key
-            );
-        }
-    }
-    let all = read_measurements(&args.data)?;
-    super::measurements::check_against_model(&all, &model, &args.data)?;
-    let mut rows: Vec<Measurement> = all.into_iter().filter(|m| m.test == args.test).collect();
-    for f in &args.filters {
-        let (k, v) = f
-            .split_once('=')
-            .ok_or_else(|| anyhow!("--where {f:?}: expected NAME=VALUE"))?;
-        let v: f64 = v
-            .trim()
-            .parse()
-            .map_err(|_| anyhow!("--where {f:?}: {v:?} is not a number"))?;
-        rows.retain(|m| m.conditions.get(k.trim()) == Some(&v));
-    }
-    if rows.is_empty() {
-        bail!(
-            "{}: no {} measurement to calibrate against",
-            args.data.display(),
-            args.test
-        );
-    }
+    let (params, model_path, model) = load_params(args)?;
+    let rows = select_rows(args, &model, &[args.test.as_str()])?;
     let stop = execute::stop_on_signals()?;
-    let cond_factors = condition_factors(&args.test);
-    let mut factors: Vec<Factor> = cond_factors.clone();
-    for p in &params {
-        let mut f = factor(&p.name, &format!("scene:pairs[{}].{}", p.pair, p.key));
-        f.low = p.low;
-        f.high = p.high;
-        factors.push(f);
-    }
+    let factors = run_factors(&args.test, &params);
     let text = experiment_text(&args.test, &model_path, args.coarse);
     let real = |p: &Param, z: f64| 0.5 * (p.low + p.high) + z * 0.5 * (p.high - p.low);
-    let cond_values = |m: &Measurement| -> Result<BTreeMap<String, f64>> {
-        cond_factors
-            .iter()
-            .map(|f| {
-                m.conditions
-                    .get(&f.name)
-                    .map(|v| (f.name.clone(), *v))
-                    .ok_or_else(|| {
-                        anyhow!(
-                            "{}:{}: a {} row needs `{}`",
-                            args.data.display(),
-                            m.row,
-                            args.test,
-                            f.name
-                        )
-                    })
-            })
-            .collect()
-    };
+    let conds_of = |m: &Measurement| cond_values(&args.test, m, &args.data);
 
     // 1. The surface runs.
-    let k = params.len();
-    let mut grid: Vec<Vec<f64>> = (0..3usize.pow(k as u32))
-        .map(|mut g| {
-            (0..k)
-                .map(|_| {
-                    let v = (g % 3) as f64 - 1.0;
-                    g /= 3;
-                    v
-                })
-                .collect()
-        })
-        .collect();
-    grid.push(vec![0.0; k]);
-    grid.push(vec![0.0; k]);
+    let grid = surface_grid(params.len());
     let mut runs = vec![];
     for m in &rows {
         for (g, z) in grid.iter().enumerate() {
@@ -299,7 +222,7 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             // fresh seeds, so that they measure the scatter between seeds.
             let first_seed = 1 + g.saturating_sub(grid.len() - 3) * args.seeds;
             for s in 0..args.seeds {
-                let mut values = cond_values(m)?;
+                let mut values = conds_of(m)?;
                 for (p, zi) in params.iter().zip(z) {
                     values.insert(p.name.clone(), real(p, *zi));
                 }
@@ -318,20 +241,20 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             }
         }
     }
-    let surface = Plan::generated(
+    let surface_plan = Plan::generated(
         &format!("{}-surface", args.test),
         text.clone(),
         Path::new("."),
         factors.clone(),
         runs,
     )?;
-    let results = run_plan(&surface, &args.out.join("surface"), args, &stop)?;
+    let results = run_plan(&surface_plan, &args.out.join("surface"), args, &stop)?;
 
     // 2-4 per condition.
     let mut report = vec![];
     for m in &rows {
-        let conds = cond_values(m)?;
-        let mine: Vec<(&PlannedRun, Option<f64>)> = surface
+        let conds = conds_of(m)?;
+        let mine: Vec<(&PlannedRun, Option<f64>)> = surface_plan
             .runs
             .iter()
             .zip(&results)
@@ -342,30 +265,11 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             .iter()
             .filter_map(|(r, v)| v.map(|v| (*r, v)))
             .collect();
-        let mut columns: Vec<(&str, Vec<f64>)> = params
+        let pts: Vec<(Vec<f64>, f64)> = ok
             .iter()
-            .map(|p| {
-                (
-                    p.name.as_str(),
-                    ok.iter().map(|(r, _)| r.values[&p.name]).collect(),
-                )
-            })
+            .map(|(r, v)| (params.iter().map(|p| r.values[&p.name]).collect(), *v))
             .collect();
-        columns.push((m.observable.as_str(), ok.iter().map(|(_, v)| *v).collect()));
-        let origin = format!("{} surface at {}", args.test, describe(&conds));
-        let table = Table::from_columns(&origin, &columns);
-        let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
-        let ranges: Vec<(f64, f64)> = params.iter().map(|p| (p.low, p.high)).collect();
-        let data = Data::from_table(&table, &names, &m.observable, Some(&ranges))?;
-        let fit = rsm::fit(
-            &data,
-            FitOptions {
-                order: Order::Quadratic,
-                curvature: false,
-                backward: None,
-            },
-        )
-        .with_context(|| format!("{origin}: {} of {} runs finished", ok.len(), mine.len()))?;
+        let fit = surface(&params, m, &pts, mine.len())?;
         let start: Vec<f64> = params
             .iter()
             .map(|p| evaluate(param_form(&model, p).expect("checked above"), &conds))
@@ -627,23 +531,37 @@ fn check_counts(args: &CalibrateArgs) -> Result<()> {
     Ok(())
 }
 
-/// Runs `plan` into `dir`; each run's observable (None when it failed).
+/// Runs `plan` into `dir`; each run's value of the test's own observable (None when it
+/// failed).
 fn run_plan(
     plan: &Plan,
     dir: &Path,
     args: &CalibrateArgs,
     stop: &Arc<AtomicBool>,
 ) -> Result<Vec<Option<f64>>> {
-    run_generated(plan, dir, args.cores, args.quiet, stop)?;
     let observable = match args.test.as_str() {
         "repose" => "repose_angle_deg",
         "direct_shear" => "peak_shear_force_n",
         _ => "ucs_kpa",
     };
+    run_and_read(plan, dir, args, stop, |_| Some(observable))
+}
+
+/// Runs `plan` into `dir`; each run's value of `observable(run.std)` (None when the run
+/// failed or has no such reading).
+pub fn run_and_read<'a>(
+    plan: &Plan,
+    dir: &Path,
+    args: &CalibrateArgs,
+    stop: &Arc<AtomicBool>,
+    observable: impl Fn(usize) -> Option<&'a str>,
+) -> Result<Vec<Option<f64>>> {
+    run_generated(plan, dir, args.cores, args.quiet, stop)?;
     Ok(plan
         .runs
         .iter()
         .map(|r| {
+            let observable = observable(r.std)?;
             let s = read_summary(&run_dir(dir, r.id))?;
             if s.status != Status::Done {
                 return None;
@@ -651,6 +569,145 @@ fn run_plan(
             s.reduced.as_ref()?.get(observable)?.as_f64()
         })
         .collect())
+}
+
+/// The free parameters, the model file (absolute) and the model, each parameter checked to
+/// be in it.
+pub fn load_params(args: &CalibrateArgs) -> Result<(Vec<Param>, PathBuf, Model)> {
+    let params: Vec<Param> = args
+        .params
+        .iter()
+        .map(|p| parse_param(p))
+        .collect::<Result<_>>()?;
+    let model_path = std::path::absolute(&args.model)?;
+    let model = Model::load(&model_path)?;
+    for p in &params {
+        if param_form(&model, p).is_none() {
+            bail!(
+                "--param {}.{}: the model {} has no pairs.{}.{} (nor bond.pairs.{}.{})",
+                p.pair,
+                p.key,
+                args.model.display(),
+                p.pair,
+                p.key,
+                p.pair,
+                p.key
+            );
+        }
+    }
+    Ok((params, model_path, model))
+}
+
+/// The measurements of `tests` that every `--where` keeps, checked against the model.
+pub fn select_rows(
+    args: &CalibrateArgs,
+    model: &Model,
+    tests: &[&str],
+) -> Result<Vec<Measurement>> {
+    let all = read_measurements(&args.data)?;
+    super::measurements::check_against_model(&all, model, &args.data)?;
+    let mut rows: Vec<Measurement> = all
+        .into_iter()
+        .filter(|m| tests.contains(&m.test.as_str()))
+        .collect();
+    for f in &args.filters {
+        let (k, v) = f
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--where {f:?}: expected NAME=VALUE"))?;
+        let v: f64 = v
+            .trim()
+            .parse()
+            .map_err(|_| anyhow!("--where {f:?}: {v:?} is not a number"))?;
+        rows.retain(|m| m.conditions.get(k.trim()) == Some(&v));
+    }
+    if rows.is_empty() {
+        bail!(
+            "{}: no {} measurement to calibrate against",
+            args.data.display(),
+            args.test
+        );
+    }
+    Ok(rows)
+}
+
+/// The surface design in coded units: the 3^k factorial, then two more centre points.
+pub fn surface_grid(k: usize) -> Vec<Vec<f64>> {
+    let mut grid: Vec<Vec<f64>> = (0..3usize.pow(k as u32))
+        .map(|mut g| {
+            (0..k)
+                .map(|_| {
+                    let v = (g % 3) as f64 - 1.0;
+                    g /= 3;
+                    v
+                })
+                .collect()
+        })
+        .collect();
+    grid.push(vec![0.0; k]);
+    grid.push(vec![0.0; k]);
+    grid
+}
+
+/// The factors of a test's runs: its conditions, then the free parameters in the scene.
+pub fn run_factors(test: &str, params: &[Param]) -> Vec<Factor> {
+    let mut f = condition_factors(test);
+    for p in params {
+        let mut x = factor(&p.name, &format!("scene:pairs[{}].{}", p.pair, p.key));
+        x.low = p.low;
+        x.high = p.high;
+        f.push(x);
+    }
+    f
+}
+
+/// A measurement's conditions, as the test's condition factors take them.
+pub fn cond_values(test: &str, m: &Measurement, data: &Path) -> Result<BTreeMap<String, f64>> {
+    condition_factors(test)
+        .iter()
+        .map(|f| {
+            m.conditions
+                .get(&f.name)
+                .map(|v| (f.name.clone(), *v))
+                .ok_or_else(|| {
+                    anyhow!(
+                        "{}:{}: a {test} row needs `{}`",
+                        data.display(),
+                        m.row,
+                        f.name
+                    )
+                })
+        })
+        .collect()
+}
+
+/// A quadratic surface of one measurement's observable over the parameters, from the runs
+/// that finished (`pts`: parameter values, value) out of `total`.
+pub fn surface(
+    params: &[Param],
+    m: &Measurement,
+    pts: &[(Vec<f64>, f64)],
+    total: usize,
+) -> Result<Anova> {
+    let mut columns: Vec<(&str, Vec<f64>)> = params
+        .iter()
+        .enumerate()
+        .map(|(j, p)| (p.name.as_str(), pts.iter().map(|(x, _)| x[j]).collect()))
+        .collect();
+    columns.push((m.observable.as_str(), pts.iter().map(|(_, v)| *v).collect()));
+    let origin = format!("{} surface at {}", m.test, describe(&m.conditions));
+    let table = Table::from_columns(&origin, &columns);
+    let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
+    let ranges: Vec<(f64, f64)> = params.iter().map(|p| (p.low, p.high)).collect();
+    let data = Data::from_table(&table, &names, &m.observable, Some(&ranges))?;
+    rsm::fit(
+        &data,
+        FitOptions {
+            order: Order::Quadratic,
+            curvature: false,
+            backward: None,
+        },
+    )
+    .with_context(|| format!("{origin}: {} of {total} runs finished", pts.len()))
 }
 
 pub fn describe(c: &BTreeMap<String, f64>) -> String {

@@ -17,29 +17,25 @@
 //! 5. **Output**: `calibration.json` (`"joint": true`), `calibration.md`, posterior samples,
 //!    and `model.toml` with each parameter set to its one calibrated value.
 
-use super::calibrate::{CalibrateArgs, Param, describe, param_form, parse_param};
-use super::calibrate_report;
-use super::compare::{
-    Measurement, condition_factors, experiment_text, factor, mean_sd, read_measurements,
-    run_generated,
+use super::calibrate::{
+    CalibrateArgs, Param, cond_values, describe, load_params, param_form, run_and_read,
+    run_factors, select_rows, surface, surface_grid,
 };
-use crate::lab::model::{Model, evaluate};
+use super::calibrate_report;
+use super::compare::{Measurement, experiment_text, mean_sd};
+use super::measurements::TESTS;
+use crate::lab::model::evaluate;
 use crate::sweep::execute;
-use crate::sweep::job::{Status, read_summary, run_dir};
-use crate::sweep::plan::{Factor, Plan, PlannedRun};
-use anyhow::{Context, Result, anyhow, bail};
+use crate::sweep::plan::{Plan, PlannedRun};
+use anyhow::{Result, bail};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 use tilth_tools::calibrate::{
     Linearised, Posterior, gauss_newton_step, linearised, minimise_in_box, smc,
 };
-use tilth_tools::rsm::{self, Anova, Data, FitOptions, Order, Table};
-
-const TESTS: [&str; 3] = ["repose", "direct_shear", "ucs"];
+use tilth_tools::rsm::Anova;
 
 /// One measurement in the joint fit.
 #[derive(Debug, Clone, Serialize)]
@@ -83,66 +79,18 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             "--test {t}: unknown, allowed repose, direct_shear, ucs (comma-separated with --joint)"
         );
     }
-    let params: Vec<Param> = args
-        .params
-        .iter()
-        .map(|p| parse_param(p))
-        .collect::<Result<_>>()?;
-    let model_path = std::path::absolute(&args.model)?;
-    let model = Model::load(&model_path)?;
-    for p in &params {
-        if param_form(&model, p).is_none() {
-            bail!(
-                "--param {}.{}: the model {} has no pairs.{}.{} (nor bond.pairs.{}.{})",
-                p.pair,
-                p.key,
-                args.model.display(),
-                p.pair,
-                p.key,
-                p.pair,
-                p.key
-            );
-        }
-    }
-    let all = read_measurements(&args.data)?;
-    super::measurements::check_against_model(&all, &model, &args.data)?;
-    let mut rows: Vec<Measurement> = all
-        .into_iter()
-        .filter(|m| tests.contains(&m.test.as_str()))
-        .collect();
-    for f in &args.filters {
-        let (k, v) = f
-            .split_once('=')
-            .ok_or_else(|| anyhow!("--where {f:?}: expected NAME=VALUE"))?;
-        let v: f64 = v
-            .trim()
-            .parse()
-            .map_err(|_| anyhow!("--where {f:?}: {v:?} is not a number"))?;
-        rows.retain(|m| m.conditions.get(k.trim()) == Some(&v));
-    }
-    if rows.is_empty() {
-        bail!(
-            "{}: no {} measurement to calibrate against",
-            args.data.display(),
-            args.test
-        );
-    }
+    let (params, model_path, model) = load_params(args)?;
+    let rows = select_rows(args, &model, &tests)?;
     let stop = execute::stop_on_signals()?;
+    // Each run reads its own measurement's observable.
+    let observable = |std: usize| {
+        rows.iter()
+            .find(|m| m.row == std)
+            .map(|m| m.observable.as_str())
+    };
     let k = params.len();
     let real = |p: &Param, z: f64| 0.5 * (p.low + p.high) + z * 0.5 * (p.high - p.low);
-    let mut grid: Vec<Vec<f64>> = (0..3usize.pow(k as u32))
-        .map(|mut g| {
-            (0..k)
-                .map(|_| {
-                    let v = (g % 3) as f64 - 1.0;
-                    g /= 3;
-                    v
-                })
-                .collect()
-        })
-        .collect();
-    grid.push(vec![0.0; k]);
-    grid.push(vec![0.0; k]);
+    let grid = surface_grid(k);
 
     // 1. Surfaces, one plan per test.
     let mut fits: Vec<(Measurement, Anova, Vec<(Vec<f64>, f64)>, usize)> = vec![];
@@ -179,15 +127,15 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             &format!("{test}-surface"),
             experiment_text(test, &model_path, args.coarse),
             Path::new("."),
-            factors(test, &params),
+            run_factors(test, &params),
             runs,
         )?;
         let values = run_and_read(
             &plan,
             &args.out.join(format!("surface-{test}")),
-            &rows,
             args,
             &stop,
+            observable,
         )?;
         for m in mine {
             let pts: Vec<(Vec<f64>, f64)> = plan
@@ -266,11 +214,11 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
                 &format!("{test}-check-{it}"),
                 experiment_text(test, &model_path, args.coarse),
                 Path::new("."),
-                factors(test, &params),
+                run_factors(test, &params),
                 runs,
             )?;
             let dir = args.out.join(format!("check-{it}-{test}"));
-            let values = run_and_read(&plan, &dir, &rows, args, &stop)?;
+            let values = run_and_read(&plan, &dir, args, &stop, observable)?;
             for &i in &idx {
                 per_row[i] = plan
                     .runs
@@ -437,88 +385,6 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     Ok(())
 }
 
-fn factors(test: &str, params: &[Param]) -> Vec<Factor> {
-    let mut f = condition_factors(test);
-    for p in params {
-        let mut x = factor(&p.name, &format!("scene:pairs[{}].{}", p.pair, p.key));
-        x.low = p.low;
-        x.high = p.high;
-        f.push(x);
-    }
-    f
-}
-
-fn cond_values(test: &str, m: &Measurement, data: &Path) -> Result<BTreeMap<String, f64>> {
-    condition_factors(test)
-        .iter()
-        .map(|f| {
-            m.conditions
-                .get(&f.name)
-                .map(|v| (f.name.clone(), *v))
-                .ok_or_else(|| {
-                    anyhow!(
-                        "{}:{}: a {test} row needs `{}`",
-                        data.display(),
-                        m.row,
-                        f.name
-                    )
-                })
-        })
-        .collect()
-}
-
-/// A quadratic surface of one measurement's observable over the parameters.
-fn surface(
-    params: &[Param],
-    m: &Measurement,
-    pts: &[(Vec<f64>, f64)],
-    total: usize,
-) -> Result<Anova> {
-    let mut columns: Vec<(&str, Vec<f64>)> = params
-        .iter()
-        .enumerate()
-        .map(|(j, p)| (p.name.as_str(), pts.iter().map(|(x, _)| x[j]).collect()))
-        .collect();
-    columns.push((m.observable.as_str(), pts.iter().map(|(_, v)| *v).collect()));
-    let origin = format!("{} surface at {}", m.test, describe(&m.conditions));
-    let table = Table::from_columns(&origin, &columns);
-    let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
-    let ranges: Vec<(f64, f64)> = params.iter().map(|p| (p.low, p.high)).collect();
-    let data = Data::from_table(&table, &names, &m.observable, Some(&ranges))?;
-    rsm::fit(
-        &data,
-        FitOptions {
-            order: Order::Quadratic,
-            curvature: false,
-            backward: None,
-        },
-    )
-    .with_context(|| format!("{origin}: {} of {total} runs finished", pts.len()))
-}
-
-/// Runs `plan` into `dir`; each run's value of its measurement's observable.
-fn run_and_read(
-    plan: &Plan,
-    dir: &Path,
-    rows: &[Measurement],
-    args: &CalibrateArgs,
-    stop: &Arc<AtomicBool>,
-) -> Result<Vec<Option<f64>>> {
-    run_generated(plan, dir, args.cores, args.quiet, stop)?;
-    Ok(plan
-        .runs
-        .iter()
-        .map(|r| {
-            let observable = &rows.iter().find(|m| m.row == r.std)?.observable;
-            let s = read_summary(&run_dir(dir, r.id))?;
-            if s.status != Status::Done {
-                return None;
-            }
-            s.reduced.as_ref()?.get(observable)?.as_f64()
-        })
-        .collect())
-}
-
 fn fmt(x: &[f64]) -> String {
     x.iter()
         .map(|v| format!("{v:.4}"))
@@ -611,12 +477,7 @@ fn markdown(
     s += &format!(
         "- posterior (SMC, {} stages): {}\n",
         post.stages,
-        params
-            .iter()
-            .enumerate()
-            .map(|(i, p)| format!("{} 95 % [{:.4}, {:.4}]", p.name, post.q025[i], post.q975[i]))
-            .collect::<Vec<_>>()
-            .join(", ")
+        calibrate_report::posterior_intervals(params, post)
     );
     s
 }

@@ -140,6 +140,16 @@ fn set(
     Ok(())
 }
 
+/// `name 95 % [low, high]` for each parameter of a posterior sample.
+pub fn posterior_intervals(params: &[Param], post: &Posterior) -> String {
+    params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| format!("{} 95 % [{:.4}, {:.4}]", p.name, post.q025[i], post.q975[i]))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 fn chrono_free_note() -> String {
     format!("tilth {}", crate::GIT_COMMIT)
 }
@@ -230,12 +240,7 @@ pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]
         s += &format!(
             "- posterior (SMC, {} stages): {}{}\n\n",
             post.stages,
-            params
-                .iter()
-                .enumerate()
-                .map(|(i, p)| format!("{} 95 % [{:.4}, {:.4}]", p.name, post.q025[i], post.q975[i]))
-                .collect::<Vec<_>>()
-                .join(", "),
+            posterior_intervals(params, post),
             if params.len() == 2 {
                 format!(", correlation {:.2}", post.correlation[0][1])
             } else {
