@@ -26,6 +26,7 @@ pub fn repose_svg(result: &ReposeResult) -> Result<String, ReduceError> {
     let mm = 1e3;
     let r = a.tray.radius_m * mm;
     let x = (-r - 2.0)..(r + 2.0);
+    let x_range = x.clone();
     // Room above the apex for the legend (about 18 px an entry) so it hides no point.
     let entries = 2 + 3 * a.views.len();
     let px_per_mm = PLOT_WIDTH as f64 / (x.end - x.start);
@@ -113,7 +114,7 @@ pub fn repose_svg(result: &ReposeResult) -> Result<String, ReduceError> {
             for (side, half) in [("left", w.left), ("right", w.right)] {
                 chart
                     .draw_series(LineSeries::new(
-                        band_line(&half, a.band_m, mm),
+                        band_line(&half, a.band_m, mm, (x_range.start, x_range.end)),
                         line.stroke_width(2),
                     ))
                     .map_err(plot_error(WHAT))?
@@ -132,8 +133,55 @@ pub fn repose_svg(result: &ReposeResult) -> Result<String, ReduceError> {
     Ok(svg)
 }
 
-/// The fitted line h = a + b u between the band's heights, in mm.
-fn band_line(half: &HalfFit, band_m: (f64, f64), mm: f64) -> [(f64, f64); 2] {
-    let u = |h: f64| (h - half.intercept_m) / half.slope;
-    [band_m.0, band_m.1].map(|h| (u(h) * mm, h * mm))
+/// The fitted line h = a + b u between the band's heights, in mm, cut where it leaves the
+/// frame's horizontal range `u_mm`. (The plotting crate pins a point outside the frame to its
+/// edge instead of cutting the segment, which would bend the drawn line and show a slope
+/// other than the measured one.)
+fn band_line(half: &HalfFit, band_m: (f64, f64), mm: f64, u_mm: (f64, f64)) -> [(f64, f64); 2] {
+    let (a, b) = (half.intercept_m * mm, half.slope);
+    let u = |h: f64| (h - a) / b;
+    let clip = |p: (f64, f64)| {
+        let uc = p.0.clamp(u_mm.0, u_mm.1);
+        if uc == p.0 { p } else { (uc, a + b * uc) }
+    };
+    [band_m.0, band_m.1].map(|h| clip((u(h * mm), h * mm)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn half(angle_deg: f64, intercept_m: f64) -> HalfFit {
+        HalfFit {
+            angle_deg,
+            slope: -angle_deg.to_radians().tan(),
+            intercept_m,
+            r_squared: 1.0,
+            points: 10,
+        }
+    }
+
+    #[test]
+    fn a_line_inside_the_frame_runs_between_the_band_heights() {
+        // h = 20 - u (mm): at h = 5 and 15, u = 15 and 5.
+        let l = band_line(&half(45.0, 0.020), (0.005, 0.015), 1e3, (-33.0, 33.0));
+        assert!((l[0].0 - 15.0).abs() < 1e-9 && (l[0].1 - 5.0).abs() < 1e-9);
+        assert!((l[1].0 - 5.0).abs() < 1e-9 && (l[1].1 - 15.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_line_leaving_the_frame_is_cut_at_its_edge_with_its_slope_kept() {
+        // A 20 degree right half from 25 mm at the axis reaches the band's foot (2 mm) at
+        // u = 63 mm, beyond the frame's 33 mm: the drawn end is at u = 33 on the same line.
+        let h = half(20.0, 0.025);
+        let l = band_line(&h, (0.002, 0.020), 1e3, (-33.0, 33.0));
+        assert!((l[0].0 - 33.0).abs() < 1e-9);
+        let drawn_slope = (l[1].1 - l[0].1) / (l[1].0 - l[0].0);
+        assert!(
+            (drawn_slope - h.slope).abs() < 1e-12,
+            "drawn {drawn_slope}, fitted {}",
+            h.slope
+        );
+        assert!((l[0].1 - (25.0 + h.slope * 33.0)).abs() < 1e-9);
+    }
 }
