@@ -30,6 +30,12 @@ pub struct ReduceArgs {
     /// Write an SVG per file here (default: beside each file).
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Repose: photographs of the heap evenly around it, each giving two halves (default: the
+    /// run's `repose.photographs`, else 2, the x-z and y-z views). Every photograph measures
+    /// the same angle on average; more of them average out how one side's outline happens
+    /// to fall.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=180))]
+    pub photographs: Option<u16>,
 }
 
 fn svg_path(file: &Path, dir: Option<&PathBuf>, what: &str) -> PathBuf {
@@ -54,7 +60,14 @@ pub fn reduce_cmd(args: &ReduceArgs, out: &mut dyn Write) -> Result<()> {
         let run = reduce::read_run(file, &ReadOptions::default())?;
         let (value, svg, line) = match args.what {
             Observable::Repose => {
-                let r = reduce::repose(&run, &Default::default())?;
+                let options = match args.photographs {
+                    Some(n) => reduce::ReposeOptions {
+                        views: reduce::View::around(n as usize),
+                        ..Default::default()
+                    },
+                    None => reduce::ReposeOptions::of_run(&run),
+                };
+                let r = reduce::repose(&run, &options)?;
                 let line = format!(
                     "repose angle {:.2} deg (halves {}; cone fit {:.2} deg, R^2 {:.3})",
                     r.analysis.repose_angle_deg,

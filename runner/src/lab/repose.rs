@@ -57,6 +57,12 @@ pub struct ReposeParams {
     /// Stop here even if not at rest (with a warning), s.
     #[serde(default = "default_max_time")]
     pub max_time: f64,
+    /// Photographs the angle is measured on, evenly around the heap (1 to 180; each gives two
+    /// halves). Every one measures the same angle on average (the test is symmetric about
+    /// its axis); more of them average out how one side's outline happens to fall. Default
+    /// 2: the x-z and y-z views.
+    #[serde(default = "default_photographs")]
+    pub photographs: u16,
 }
 
 fn default_drop() -> f64 {
@@ -85,6 +91,9 @@ fn default_rest_angle() -> f64 {
 }
 fn default_rest_time() -> f64 {
     0.2
+}
+fn default_photographs() -> u16 {
+    2
 }
 fn default_max_time() -> f64 {
     8.0
@@ -131,6 +140,12 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
             ("max_time", p.max_time),
         ],
     )?;
+    if !(1..=180).contains(&p.photographs) {
+        bail!(
+            "repose.photographs = {} is out of range: allowed 1 to 180",
+            p.photographs
+        );
+    }
     let outlet = p
         .funnel_outlet_diameter
         .unwrap_or(if c.coarse { 10.0 * d } else { 0.020 });
@@ -488,6 +503,7 @@ impl Protocol for ReposeProtocol {
             ("drop_height_m", self.p.drop_height.to_string()),
             ("particle_diameter_m", self.diameter.to_string()),
             ("mass_g", self.mass_g.to_string()),
+            ("photographs", self.p.photographs.to_string()),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))

@@ -386,7 +386,7 @@ pub fn reduce_run(path: &Path, kind: &str) -> serde_json::Value {
         let run = reduce::read_run(path, &reduce::ReadOptions::default())?;
         Ok(match kind {
             "repose" => {
-                let r = reduce::repose(&run, &Default::default())?;
+                let r = reduce::repose(&run, &reduce::ReposeOptions::of_run(&run))?;
                 std::fs::write(
                     path.with_file_name("repose.svg"),
                     reduce::plot::repose_svg(&r)?,

@@ -113,6 +113,22 @@ impl Default for ReposeOptions {
     }
 }
 
+impl ReposeOptions {
+    /// The defaults, with the photographs the run asks for (`photographs` in its
+    /// `tilth.experiment` record; two when it has none).
+    pub fn of_run(run: &Run) -> ReposeOptions {
+        let n = run
+            .experiment_number("photographs")
+            .ok()
+            .filter(|n| (1.0..=180.0).contains(n))
+            .map_or(2, |n| n as usize);
+        ReposeOptions {
+            views: View::around(n),
+            ..ReposeOptions::default()
+        }
+    }
+}
+
 /// The line fitted to one half of a silhouette: h = intercept_m + slope u (h above the tray
 /// top, u horizontal from the tray axis, both m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -245,11 +261,15 @@ pub fn repose_angle(
 
     let mut views = Vec::with_capacity(options.views.len());
     for &view in &options.views {
-        let coord = match view {
-            View::Xz => &u,
-            View::Yz => &v,
+        let sil = match view {
+            View::Xz => silhouette(options.method, &u, &centre, &rad, width, -r, r + width),
+            View::Yz => silhouette(options.method, &v, &centre, &rad, width, -r, r + width),
+            View::Azimuth(_) => {
+                let (cx, cy) = view.direction();
+                let w: Vec<f64> = u.iter().zip(&v).map(|(x, y)| x * cx + y * cy).collect();
+                silhouette(options.method, &w, &centre, &rad, width, -r, r + width)
+            }
         };
-        let sil = silhouette(options.method, coord, &centre, &rad, width, -r, r + width);
         views.push(fit_view(view, sil, band_m)?);
     }
     let cone = cone_fit(&u, &v, &h, diameter, r, band_m, 0.5 * diameter)?;

@@ -24,21 +24,50 @@
 use serde::{Deserialize, Serialize};
 
 /// The vertical plane a silhouette is projected onto.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum View {
     /// The x-z plane: horizontal coordinate x.
     Xz,
     /// The y-z plane: horizontal coordinate y (a second photograph at right angles).
     Yz,
+    /// The vertical plane through the tray axis at this azimuth from the x axis, degrees:
+    /// horizontal coordinate x cos(a) + y sin(a) (0 is the x-z view, 90 the y-z view).
+    Azimuth(f64),
 }
 
 impl View {
-    /// Name of the horizontal axis ("x" or "y").
-    pub fn axis(self) -> &'static str {
+    /// Name of the horizontal axis ("x", "y" or "azimuth A").
+    pub fn axis(self) -> String {
         match self {
-            View::Xz => "x",
-            View::Yz => "y",
+            View::Xz => "x".to_string(),
+            View::Yz => "y".to_string(),
+            View::Azimuth(a) => format!("azimuth {a:.1} deg"),
+        }
+    }
+
+    /// The unit vector of the view's horizontal coordinate in the x-y plane.
+    pub fn direction(self) -> (f64, f64) {
+        match self {
+            View::Xz => (1.0, 0.0),
+            View::Yz => (0.0, 1.0),
+            View::Azimuth(a) => {
+                let r = a.to_radians();
+                (r.cos(), r.sin())
+            }
+        }
+    }
+
+    /// `n` photographs evenly around the heap: azimuths k 180/n degrees, k = 0..n (a
+    /// photograph and the one from the opposite side see mirror images of one outline). Two
+    /// are the x-z and y-z views.
+    pub fn around(n: usize) -> Vec<View> {
+        match n {
+            1 => vec![View::Xz],
+            2 => vec![View::Xz, View::Yz],
+            _ => (0..n)
+                .map(|k| View::Azimuth(180.0 * k as f64 / n as f64))
+                .collect(),
         }
     }
 }

@@ -128,6 +128,56 @@ fn rough_random_surface_reads_slightly_flatter() {
     }
 }
 
+/// Photographs all around the heap: the views at azimuth 0 and 90 degrees are the x-z and
+/// y-z photographs, and eight of them (sixteen halves) read a synthetic cone as closely as two.
+#[test]
+fn photographs_all_around_read_the_cone() {
+    let (heap, _) = cone::synthetic_cone(35.0, 2, Surface::Rings);
+    let two = repose_angle(&heap, &tray(), &ReposeOptions::default()).unwrap();
+    let at = |deg: f64| {
+        let options = ReposeOptions {
+            views: vec![View::Azimuth(deg)],
+            ..ReposeOptions::default()
+        };
+        repose_angle(&heap, &tray(), &options).unwrap().views[0].clone()
+    };
+    for (deg, photo) in [(0.0, &two.views[0]), (90.0, &two.views[1])] {
+        let az = at(deg);
+        for (a, b) in [(az.left, photo.left), (az.right, photo.right)] {
+            assert!(
+                (a.angle_deg - b.angle_deg).abs() < 1e-6,
+                "azimuth {deg}: {} against {}",
+                a.angle_deg,
+                b.angle_deg
+            );
+        }
+    }
+    let options = ReposeOptions {
+        views: View::around(8),
+        ..ReposeOptions::default()
+    };
+    let eight = repose_angle(&heap, &tray(), &options).unwrap();
+    assert_eq!(eight.views.len(), 8);
+    assert!(
+        (eight.repose_angle_deg - 35.0).abs() < 0.2,
+        "{}",
+        eight.repose_angle_deg
+    );
+    let svg = repose_svg(&ReposeResult {
+        source: RunSource {
+            file: "synthetic".into(),
+            complete: true,
+            incomplete_reason: None,
+        },
+        analysis: eight,
+    })
+    .unwrap();
+    assert!(
+        svg.contains("azimuth 157.5 deg"),
+        "one legend entry per photograph"
+    );
+}
+
 /// The highest-top-per-bin silhouette (one diameter bins) is available and close, but
 /// scatters more (its points are not on the outline: see silhouette.rs).
 #[test]

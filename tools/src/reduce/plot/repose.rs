@@ -13,6 +13,15 @@ use plotters::prelude::*;
 use plotters::style::RGBColor;
 
 const WHAT: &str = "the repose silhouette";
+/// Line colours of photographs taken all around the heap.
+const AROUND: [RGBColor; 6] = [
+    RGBColor(16, 60, 120),
+    RGBColor(170, 70, 0),
+    RGBColor(44, 130, 44),
+    RGBColor(150, 30, 30),
+    RGBColor(110, 70, 160),
+    RGBColor(120, 80, 60),
+];
 /// Width of the plotting area, px; its height follows from the data at equal scale.
 const PLOT_WIDTH: u32 = 760;
 const MARGIN: u32 = 15;
@@ -28,7 +37,12 @@ pub fn repose_svg(result: &ReposeResult) -> Result<String, ReduceError> {
     let x = (-r - 2.0)..(r + 2.0);
     let x_range = x.clone();
     // Room above the apex for the legend (about 18 px an entry) so it hides no point.
-    let entries = 2 + 3 * a.views.len();
+    let around = a.views.iter().any(|w| matches!(w.view, View::Azimuth(_)));
+    let entries = 2 + if around {
+        1 + a.views.len()
+    } else {
+        3 * a.views.len()
+    };
     let px_per_mm = PLOT_WIDTH as f64 / (x.end - x.start);
     let y = -3.0..(a.heap_height_m * mm * 1.08 + (18 * entries + 24) as f64 / px_per_mm);
     let plot_height = ((y.end - y.start) * px_per_mm).round() as u32;
@@ -93,14 +107,50 @@ pub fn repose_svg(result: &ReposeResult) -> Result<String, ReduceError> {
             }
         }
 
-        for w in &a.views {
+        for (k, w) in a.views.iter().enumerate() {
+            if around {
+                // Photographs all around: faint points, one legend entry per photograph.
+                let colour = AROUND[k % AROUND.len()];
+                let series =
+                    chart
+                        .draw_series(w.silhouette_m.iter().map(|&(u, h)| {
+                            Circle::new((u * mm, h * mm), 1, colour.mix(0.5).filled())
+                        }))
+                        .map_err(plot_error(WHAT))?;
+                if k == 0 {
+                    series
+                        .label(format!("silhouettes ({how})"))
+                        .legend(move |(x, y)| Circle::new((x + 10, y), 3, GREY.filled()));
+                }
+                for (side, half) in [(0, w.left), (1, w.right)] {
+                    let series = chart
+                        .draw_series(LineSeries::new(
+                            band_line(&half, a.band_m, mm, (x_range.start, x_range.end)),
+                            colour.stroke_width(1),
+                        ))
+                        .map_err(plot_error(WHAT))?;
+                    if side == 0 {
+                        series
+                            .label(format!(
+                                "{}: {:.2}° / {:.2}°",
+                                w.view.axis(),
+                                w.left.angle_deg,
+                                w.right.angle_deg
+                            ))
+                            .legend(move |(x, y)| {
+                                PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2))
+                            });
+                    }
+                }
+                continue;
+            }
             let (points, line): (RGBColor, RGBColor) = match w.view {
-                View::Xz => (BLUE, DARK_BLUE),
                 View::Yz => (ORANGE, DARK_ORANGE),
+                _ => (BLUE, DARK_BLUE),
             };
             let name = match w.view {
-                View::Xz => "x-z",
                 View::Yz => "y-z",
+                _ => "x-z",
             };
             chart
                 .draw_series(
