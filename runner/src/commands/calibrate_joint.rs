@@ -348,7 +348,8 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         })
         .collect();
     let model_out = args.out.join("model.toml");
-    calibrate_report::write_constants(&model_path, &model_out, &params, &setting)?;
+    let fixed = calibrate_report::shared_conditions(rows.iter().map(|m| &m.conditions));
+    calibrate_report::write_constants(&model_path, &model_out, &params, &setting, &fixed)?;
     let start: Vec<Option<f64>> = params
         .iter()
         .map(|p| {

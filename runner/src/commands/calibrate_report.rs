@@ -3,6 +3,7 @@
 
 use super::calibrate::{CalibrateArgs, ConditionResult, Param, describe};
 use anyhow::{Context, Result, anyhow, bail};
+use std::collections::BTreeMap;
 use std::path::Path;
 use tilth_tools::calibrate::Posterior;
 
@@ -25,7 +26,11 @@ pub fn write_samples(path: &Path, params: &[Param], post: &Posterior) -> Result<
 }
 
 /// The starting model with each parameter replaced by a table over the single condition that
-/// varies (or a constant with one condition); everything else kept as written.
+/// varies (or a constant with one condition); everything else kept as written. Where the
+/// calibrated conditions share a fixed value (`--where moisture_pct=6`, or one condition
+/// only), the new value applies there only: it becomes the first case of a `cases` table
+/// whose last case keeps the model's previous value for every other condition (see
+/// [`only_where`]), so that calibrating one condition loses nothing written for the others.
 pub fn write_model(
     from: &Path,
     to: &Path,
@@ -78,27 +83,115 @@ pub fn write_model(
                     .join(", ")
             ),
         };
+        let fixed = shared_conditions(results.iter().map(|r| &r.conditions));
+        let value = only_where(&fixed, value, current(&doc, p));
         set(&mut doc, from, p, value, "tilth calibrate")?;
     }
     std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
 }
 
+/// The conditions every one of `conds` has, with the same value in all.
+pub fn shared_conditions<'a>(
+    conds: impl IntoIterator<Item = &'a BTreeMap<String, f64>>,
+) -> BTreeMap<String, f64> {
+    let mut it = conds.into_iter();
+    let Some(first) = it.next() else {
+        return BTreeMap::new();
+    };
+    let mut shared = first.clone();
+    for c in it {
+        shared.retain(|k, v| c.get(k).is_some_and(|o| (o - *v).abs() < 1e-9));
+    }
+    shared
+}
+
+/// `value` where the conditions are `fixed`, the model's `previous` value elsewhere:
+/// `{ cases = [ { when = fixed, value }, ...previous ] }`, the previous cases appended when
+/// it was a `cases` table (the first match wins, so the new case overrides the old one at
+/// its conditions), else one last case `{ when = {}, value = previous }` (an empty `when`
+/// matches every condition). With no fixed condition, or nothing previous, `value` alone.
+pub fn only_where(
+    fixed: &BTreeMap<String, f64>,
+    value: toml_edit::Value,
+    previous: Option<toml_edit::Value>,
+) -> toml_edit::Value {
+    let Some(previous) = previous.filter(|_| !fixed.is_empty()) else {
+        return value;
+    };
+    let case = |when: toml_edit::InlineTable, value: toml_edit::Value| {
+        let mut c = toml_edit::InlineTable::new();
+        c.insert("when", toml_edit::Value::InlineTable(when));
+        c.insert("value", value);
+        toml_edit::Value::InlineTable(c)
+    };
+    let mut when = toml_edit::InlineTable::new();
+    for (k, v) in fixed {
+        when.insert(k, (*v).into());
+    }
+    let mut cases = toml_edit::Array::new();
+    cases.push(case(when, value));
+    let old_cases = previous
+        .as_inline_table()
+        .and_then(|t| t.get("cases"))
+        .and_then(|c| c.as_array())
+        .cloned();
+    match old_cases {
+        Some(old) => {
+            for c in old.iter() {
+                cases.push(c.clone());
+            }
+        }
+        None => {
+            let mut prev = previous;
+            prev.decor_mut().clear();
+            cases.push(case(toml_edit::InlineTable::new(), prev));
+        }
+    }
+    for c in cases.iter_mut() {
+        c.decor_mut().set_prefix(" ");
+    }
+    let mut t = toml_edit::InlineTable::new();
+    t.insert("cases", toml_edit::Value::Array(cases));
+    toml_edit::Value::InlineTable(t)
+}
+
+/// The model's value of `p` as written (`[pairs.PAIR]`, else `[bond.pairs.PAIR]`).
+fn current(doc: &toml_edit::DocumentMut, p: &Param) -> Option<toml_edit::Value> {
+    let from_pairs = doc
+        .get("pairs")
+        .and_then(|t| t.get(&p.pair))
+        .and_then(|t| t.get(&p.key));
+    let from_bond = doc
+        .get("bond")
+        .and_then(|t| t.get("pairs"))
+        .and_then(|t| t.get(&p.pair))
+        .and_then(|t| t.get(&p.key));
+    from_pairs.or(from_bond).and_then(|i| i.as_value()).cloned()
+}
+
 /// The starting model with each parameter set to one value (a joint calibration), written
 /// where the model has it (`[pairs.PAIR]`, else `[bond.pairs.PAIR]`); everything else kept.
-pub fn write_constants(from: &Path, to: &Path, params: &[Param], values: &[f64]) -> Result<()> {
+/// Where every measurement fitted shares a condition (`--where moisture_pct=6`), the value
+/// applies there only and the previous value stays for the rest ([`only_where`]).
+pub fn write_constants(
+    from: &Path,
+    to: &Path,
+    params: &[Param],
+    values: &[f64],
+    fixed: &BTreeMap<String, f64>,
+) -> Result<()> {
     let text = std::fs::read_to_string(from)
         .with_context(|| format!("{}: cannot read", from.display()))?;
     let mut doc: toml_edit::DocumentMut = text
         .parse()
         .with_context(|| format!("{}: not TOML", from.display()))?;
     for (p, v) in params.iter().zip(values) {
-        set(
-            &mut doc,
-            from,
-            p,
+        let value = only_where(
+            fixed,
             toml_edit::Value::from((v * 1e6).round() / 1e6),
-            "tilth calibrate --joint",
-        )?;
+            current(&doc, p),
+        );
+        set(&mut doc, from, p, value, "tilth calibrate --joint")?;
     }
     std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
 }
@@ -249,4 +342,75 @@ pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lab::model::evaluate;
+
+    /// The written form as the model reader sees it, evaluated at `conds`.
+    fn at(form: &toml_edit::Value, conds: &[(&str, f64)]) -> f64 {
+        let t: toml::Table = format!("v = {form}").parse().unwrap();
+        let c = conds.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        evaluate(&t["v"], &c).unwrap()
+    }
+
+    fn fixed(conds: &[(&str, f64)]) -> BTreeMap<String, f64> {
+        conds.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+    }
+
+    #[test]
+    fn shared_conditions_are_those_all_have_alike() {
+        let a = fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 0.34)]);
+        let b = fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 2.76)]);
+        let c = fixed(&[("moisture_pct", 6.0)]);
+        assert_eq!(
+            shared_conditions([&a, &b, &c]),
+            fixed(&[("moisture_pct", 6.0)])
+        );
+        assert!(shared_conditions([&a, &fixed(&[("moisture_pct", 9.0)])]).is_empty());
+    }
+
+    #[test]
+    fn a_value_calibrated_at_one_condition_keeps_the_previous_one_elsewhere() {
+        let previous: toml_edit::Value =
+            "{ interpolate = \"moisture_pct\", x = [3, 12], y = [0.1, 0.4] }"
+                .parse()
+                .unwrap();
+        let v = only_where(&fixed(&[("moisture_pct", 6.0)]), 0.9.into(), Some(previous));
+        assert_eq!(at(&v, &[("moisture_pct", 6.0)]), 0.9);
+        assert!((at(&v, &[("moisture_pct", 9.0)]) - 0.3).abs() < 1e-12);
+        assert!((at(&v, &[("moisture_pct", 3.0)]) - 0.1).abs() < 1e-12);
+        // No fixed condition: the new value replaces the old one everywhere.
+        let all = only_where(&BTreeMap::new(), 0.9.into(), Some(1.0.into()));
+        assert_eq!(at(&all, &[("moisture_pct", 9.0)]), 0.9);
+    }
+
+    #[test]
+    fn a_cases_table_gets_the_new_case_first_and_keeps_its_own() {
+        let previous: toml_edit::Value =
+            "{ cases = [ { when = { moisture_pct = 6 }, value = 1.0 }, { when = { firmness_mpa = 1.55 }, value = 2.0 } ] }"
+                .parse()
+                .unwrap();
+        let v = only_where(
+            &fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
+            5.0.into(),
+            Some(previous),
+        );
+        let cases = v.as_inline_table().unwrap()["cases"].as_array().unwrap();
+        assert_eq!(cases.len(), 3);
+        assert_eq!(
+            at(&v, &[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
+            5.0
+        );
+        assert_eq!(
+            at(&v, &[("moisture_pct", 6.0), ("firmness_mpa", 0.34)]),
+            1.0
+        );
+        assert_eq!(
+            at(&v, &[("moisture_pct", 9.0), ("firmness_mpa", 1.55)]),
+            2.0
+        );
+    }
 }

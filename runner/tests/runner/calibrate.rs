@@ -166,8 +166,25 @@ fn calibrate_a_bond_stiffness_against_the_ucs() {
         .unwrap()
         .parse()
         .unwrap();
-    let bond = &model["bond"]["pairs"]["soil-soil"]["normal_stiffness_per_area"];
-    assert_eq!(bond.as_float(), c["calibrated"][0].as_f64());
+    // Calibrated at one condition, the value applies there only: a first case at 6 %,
+    // 1.55 MPa, then the model's own cases, unchanged, for every other condition.
+    let bond = &model["bond"]["pairs"]["soil-soil"]["normal_stiffness_per_area"]["cases"];
+    let cases = bond.as_array().unwrap();
+    assert_eq!(
+        cases[0]["when"].as_table().unwrap().clone(),
+        "firmness_mpa = 1.55\nmoisture_pct = 6.0"
+            .parse::<toml::Table>()
+            .unwrap()
+    );
+    assert_eq!(cases[0]["value"].as_float(), c["calibrated"][0].as_f64());
+    let original: toml::Table = std::fs::read_to_string(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml"),
+    )
+    .unwrap()
+    .parse()
+    .unwrap();
+    let before = &original["bond"]["pairs"]["soil-soil"]["normal_stiffness_per_area"]["cases"];
+    assert_eq!(&cases[1..], before.as_array().unwrap().as_slice());
     assert!(
         model["pairs"]["soil-soil"]
             .get("normal_stiffness_per_area")
