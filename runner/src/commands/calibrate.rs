@@ -18,7 +18,10 @@
 //!    the likelihood's spread being the fit's residual standard deviation.
 //! 5. **Output.** `DIR/calibration.json`, `calibration.md`, a contour plot per condition, the
 //!    posterior samples, and `DIR/model.toml`: the starting model with the calibrated
-//!    parameters as tables over the condition (comments kept).
+//!    parameters as tables over the condition (comments kept). Calibrated where a condition
+//!    is fixed (`--where moisture_pct=6`, or one condition only), a value applies there only:
+//!    it is written as the first case of a `cases` table that keeps the model's previous
+//!    value for every other condition.
 
 use super::calibrate_report;
 use super::compare::{

@@ -15,7 +15,9 @@
 //! 4. **Uncertainty**: linearised intervals from the Jacobian of all the residuals (a ridge is
 //!    reported as such) and an SMC posterior on the surfaces.
 //! 5. **Output**: `calibration.json` (`"joint": true`), `calibration.md`, posterior samples,
-//!    and `model.toml` with each parameter set to its one calibrated value.
+//!    and `model.toml` with each parameter set to its one calibrated value (where every
+//!    measurement fitted shares a condition, at that condition only, the previous value
+//!    kept for the others).
 
 use super::calibrate::{
     CalibrateArgs, Param, cond_values, describe, load_params, param_form, run_and_read,
