@@ -123,8 +123,9 @@ pub fn build(
             file.format_version
         );
     }
-    let model = Model::load(&dir.join(&file.model))
+    let mut model = Model::load(&dir.join(&file.model))
         .with_context(|| format!("{origin}: model = \"{}\"", file.model))?;
+    bond_overrides_into_model(&mut model, scene_overrides);
     let s = &file.simulation;
     if !(s.dt_fraction > 0.0 && s.dt_fraction <= 1.0) {
         bail!(
@@ -186,6 +187,35 @@ pub fn build(
             .with_context(|| format!("{origin}: scene:{path}"))?;
     }
     Ok(built)
+}
+
+/// Scene overrides of bond parameters (`pairs[P].K` where the model has K in
+/// `[bond.pairs.P]` and not in `[pairs.P]`) written into the model as well, so that what the
+/// lab derives from the bonds before the overrides reach the scene (the time step from the
+/// stiffest bond) sees the values the run will have: a sweep or calibration over bond
+/// stiffness otherwise runs stiff bonds at the time step of the model's soft ones.
+fn bond_overrides_into_model(model: &mut Model, scene_overrides: &[(String, Value)]) {
+    let Some(bond) = model.file.bond.as_mut() else {
+        return;
+    };
+    for (path, v) in scene_overrides {
+        let Some((pair, key)) = path
+            .strip_prefix("pairs[")
+            .and_then(|rest| rest.split_once("]."))
+        else {
+            continue;
+        };
+        let in_contact = model
+            .file
+            .pairs
+            .get(pair)
+            .is_some_and(|t| t.contains_key(key));
+        if let Some(slot) = bond.pairs.get_mut(pair).and_then(|t| t.get_mut(key))
+            && !in_contact
+        {
+            *slot = v.clone();
+        }
+    }
 }
 
 fn one_line(e: &toml::de::Error) -> String {
@@ -291,5 +321,39 @@ pub mod scene {
             out.insert(k.to_string(), v.clone());
         }
         Value::Table(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ucs_dt(overrides: &[(String, Value)]) -> f64 {
+        let text = "format_version = 1\nexperiment = \"ucs\"\nmodel = \"models/li2022.toml\"\ncoarse = true\n[conditions]\nmoisture_pct = 6\nfirmness_mpa = 1.55\n";
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let built = build(toml::from_str(text).unwrap(), "test", &root, overrides).unwrap();
+        built.scene["simulation"]["dt"].as_float().unwrap()
+    }
+
+    /// A sweep that stiffens the bonds through the scene gets the time step of the stiffer
+    /// bonds: BOND_DT_FRACTION sqrt(m / (S pi r^2)) for the coarse preset's 4 mm grains.
+    #[test]
+    fn a_stiffer_bond_set_through_the_scene_shortens_the_time_step() {
+        let soft = ucs_dt(&[]);
+        for key in ["normal_stiffness_per_area", "shear_stiffness_per_area"] {
+            let stiff = ucs_dt(&[(format!("pairs[soil-soil].{key}"), Value::Float(1e10))]);
+            let (d, rho) = (0.004, 1380.0);
+            let m = rho * std::f64::consts::PI * d * d * d / 6.0;
+            let k = 1e10 * std::f64::consts::PI * (0.5 * d) * (0.5 * d);
+            let expected = super::super::specimen::BOND_DT_FRACTION * (m / k).sqrt();
+            assert!(
+                (stiff - expected).abs() < 1e-12 * expected,
+                "{key}: dt {stiff} against {expected}"
+            );
+            assert!(stiff < soft, "{key}: {stiff} against {soft}");
+        }
+        // A contact parameter (in [pairs]) leaves the time step alone.
+        let friction = ucs_dt(&[("pairs[soil-soil].friction".into(), Value::Float(0.3))]);
+        assert_eq!(friction, soft);
     }
 }

@@ -339,16 +339,21 @@ impl Preparation {
     }
 }
 
-/// sqrt(m / (S_n A)) of a bond between two particles of diameter `d` with the model's
-/// stiffest bond (s).
+/// sqrt(m / (S A)) of a bond between two particles of diameter `d` with the model's stiffest
+/// bond spring (s): S the larger of the normal and shear stiffness per area, since either
+/// spring oscillates on that time scale.
 pub fn bond_time_scale(c: &Common, d: f64) -> Result<f64> {
     let (_, _, pairs) = c.model.scene_parts(c.conditions, true)?;
     let mut k_max: f64 = 0.0;
     for pair in pairs.as_array().into_iter().flatten() {
         let num = |k: &str| pair.get(k).and_then(Value::as_float);
-        if let Some(sn) = num("normal_stiffness_per_area") {
+        let stiffest = ["normal_stiffness_per_area", "shear_stiffness_per_area"]
+            .into_iter()
+            .filter_map(num)
+            .fold(None, |a: Option<f64>, s| Some(a.map_or(s, |a| a.max(s))));
+        if let Some(s) = stiffest {
             let rb = 0.5 * d * num("bond_radius_ratio").unwrap_or(1.0);
-            k_max = k_max.max(sn * std::f64::consts::PI * rb * rb);
+            k_max = k_max.max(s * std::f64::consts::PI * rb * rb);
         }
     }
     let rho = super::experiment::soil_density(c.model)?;
