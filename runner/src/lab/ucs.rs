@@ -91,6 +91,8 @@ impl Default for UcsParams {
 
 const MOULD: usize = 1;
 const PLATEN: usize = 2;
+/// The fragment catcher's radius beyond the specimen's, m (inside the domain's r + 0.05).
+const CATCHER_GAP: f64 = 0.04;
 
 pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
@@ -161,6 +163,10 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
                 ]),
                 specimen::ring("mould", 0.0, z_top, r),
                 specimen::disc("platen", z_top, r + 0.02),
+                // A brittle specimen throws fragments at up to about 1 m/s when it fails;
+                // without a wall around it they leave the domain and end the run as an
+                // error. The catcher holds them on the base, well clear of the specimen.
+                specimen::ring("catcher", 0.0, z_top + 0.02, r + CATCHER_GAP),
             ]),
         ),
         (
