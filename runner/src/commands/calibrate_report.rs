@@ -128,6 +128,22 @@ pub fn only_where(
     for (k, v) in fixed {
         when.insert(k, (*v).into());
     }
+    // An old case for exactly these conditions (an earlier calibration there) is replaced.
+    let same_conditions = |c: &toml_edit::Value| {
+        let Some(w) = c
+            .as_inline_table()
+            .and_then(|t| t.get("when"))
+            .and_then(|w| w.as_inline_table())
+        else {
+            return false;
+        };
+        w.len() == fixed.len()
+            && w.iter().all(|(k, v)| {
+                let v = v.as_float().or(v.as_integer().map(|i| i as f64));
+                v.zip(fixed.get(k))
+                    .is_some_and(|(a, b)| (a - b).abs() < 1e-9)
+            })
+    };
     let mut cases = toml_edit::Array::new();
     cases.push(case(when, value));
     let old_cases = previous
@@ -137,7 +153,7 @@ pub fn only_where(
         .cloned();
     match old_cases {
         Some(old) => {
-            for c in old.iter() {
+            for c in old.iter().filter(|c| !same_conditions(c)) {
                 cases.push(c.clone());
             }
         }
@@ -410,6 +426,24 @@ mod tests {
         );
         assert_eq!(
             at(&v, &[("moisture_pct", 9.0), ("firmness_mpa", 1.55)]),
+            2.0
+        );
+        // Calibrated there again: the earlier case is replaced, not shadowed.
+        let again = only_where(
+            &fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
+            7.0.into(),
+            Some(v),
+        );
+        let cases = again.as_inline_table().unwrap()["cases"]
+            .as_array()
+            .unwrap();
+        assert_eq!(cases.len(), 3);
+        assert_eq!(
+            at(&again, &[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
+            7.0
+        );
+        assert_eq!(
+            at(&again, &[("moisture_pct", 9.0), ("firmness_mpa", 1.55)]),
             2.0
         );
     }
