@@ -14,23 +14,23 @@ fn number(v: &toml_edit::Value) -> Option<f64> {
 
 /// Which array of a value table [`add_to`] shifts: every `y` of an `interpolate` table
 /// (true: all of it) or the constant of a `polynomial`'s `coefficients` (false: the first).
-fn varied_list(t: &toml_edit::InlineTable, pair: &str, key: &str) -> Result<(&'static str, bool)> {
+fn varied_list(t: &toml_edit::InlineTable, label: &str) -> Result<(&'static str, bool)> {
     if t.contains_key("interpolate") {
         Ok(("y", true))
     } else if t.contains_key("polynomial") {
         Ok(("coefficients", false))
     } else {
-        bail!(
-            "pairs.{pair}.{key}: only a number, an interpolate or a polynomial table can be varied"
-        )
+        bail!("{label}: only a number, an interpolate, a polynomial or a cases table can be varied")
     }
 }
 
 /// The table a `HEAD.KEY` path names: `[particles]` for `particles.KEY` (the size mix;
-/// created when missing), else `[pairs.HEAD]`.
+/// created when missing); else `[pairs.HEAD]`, or `[bond.pairs.HEAD]` where only that one has
+/// the key (bond stiffness and strength; the convention of `tilth calibrate --param`).
 fn table_mut<'a>(
     doc: &'a mut toml_edit::DocumentMut,
     head: &str,
+    key: &str,
 ) -> Result<&'a mut dyn toml_edit::TableLike> {
     if head == "particles" {
         if doc.get("particles").is_none() {
@@ -40,18 +40,58 @@ fn table_mut<'a>(
             .as_table_like_mut()
             .ok_or_else(|| anyhow!("[particles] is not a table"));
     }
+    if in_bond_only(doc, head, key) {
+        return doc["bond"]["pairs"][head]
+            .as_table_like_mut()
+            .ok_or_else(|| anyhow!("[bond.pairs.{head}] is not a table"));
+    }
     doc["pairs"][head]
         .as_table_like_mut()
         .ok_or_else(|| anyhow!("the model has no [pairs.{head}]"))
 }
 
-/// Adds `delta` to `pairs.PAIR.KEY` (or `particles.KEY`) of a model document: a number, each `y` of an
-/// `interpolate` table, or the constant of a `polynomial`; a missing key becomes `delta`.
+/// Read-only twin of [`table_mut`]; `None` for a missing `[particles]`.
+fn table<'a>(
+    doc: &'a toml_edit::DocumentMut,
+    head: &str,
+    key: &str,
+) -> Result<Option<&'a dyn toml_edit::TableLike>> {
+    if head == "particles" {
+        return Ok(doc.get("particles").and_then(|t| t.as_table_like()));
+    }
+    let path: &[&str] = if in_bond_only(doc, head, key) {
+        &["bond", "pairs", head]
+    } else {
+        &["pairs", head]
+    };
+    let mut item = doc.as_item();
+    for part in path {
+        item = item
+            .get(part)
+            .ok_or_else(|| anyhow!("the model has no [{}]", path.join(".")))?;
+    }
+    Ok(item.as_table_like())
+}
+
+/// Whether `key` is in `[bond.pairs.PAIR]` and not in `[pairs.PAIR]`.
+fn in_bond_only(doc: &toml_edit::DocumentMut, pair: &str, key: &str) -> bool {
+    let has = |item: Option<&toml_edit::Item>| item.and_then(|t| t.get(key)).is_some();
+    !has(doc.get("pairs").and_then(|t| t.get(pair)))
+        && has(doc
+            .get("bond")
+            .and_then(|t| t.get("pairs"))
+            .and_then(|t| t.get(pair)))
+}
+
+/// Adds `delta` to `pairs.PAIR.KEY` (or `particles.KEY`, or `bond.pairs.PAIR.KEY` where only
+/// the bond has it) of a model document: a number, each `y` of an `interpolate` table, the
+/// constant of a `polynomial`, or each case's value of a `cases` table; a missing key becomes
+/// `delta`.
 pub fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Result<()> {
     let (pair, key) = path
         .split_once('.')
         .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
-    let table = table_mut(doc, pair)?;
+    let table = table_mut(doc, pair, key)?;
     let Some(item) = table.get_mut(key) else {
         table.insert(key, toml_edit::value(delta));
         return Ok(());
@@ -59,27 +99,81 @@ pub fn add_to(doc: &mut toml_edit::DocumentMut, path: &str, delta: f64) -> Resul
     let v = item
         .as_value_mut()
         .ok_or_else(|| anyhow!("pairs.{pair}.{key} is not a value"))?;
+    shift(v, delta, &format!("pairs.{pair}.{key}"))
+}
+
+/// Adds `delta` to every number [`numbers_in`] reads from a value form.
+fn shift(v: &mut toml_edit::Value, delta: f64, label: &str) -> Result<()> {
     if let Some(x) = number(v) {
         *v = (x + delta).into();
         return Ok(());
     }
-    if let Some(t) = v.as_inline_table_mut() {
-        let (list, all) = varied_list(t, pair, key)?;
-        let arr = t
-            .get_mut(list)
+    let t = v
+        .as_inline_table_mut()
+        .ok_or_else(|| anyhow!("{label} cannot be varied"))?;
+    if t.contains_key("cases") {
+        let cases = t
+            .get_mut("cases")
             .and_then(|a| a.as_array_mut())
-            .ok_or_else(|| anyhow!("pairs.{pair}.{key}: no `{list}` array"))?;
-        for k in 0..arr.len() {
-            if k > 0 && !all {
-                break;
-            }
-            let x = number(arr.get(k).unwrap())
-                .ok_or_else(|| anyhow!("pairs.{pair}.{key}.{list}[{k}] is not a number"))?;
-            arr.replace(k, x + delta);
+            .ok_or_else(|| anyhow!("{label}.cases is not a list"))?;
+        for (k, case) in cases.iter_mut().enumerate() {
+            let value = case
+                .as_inline_table_mut()
+                .and_then(|c| c.get_mut("value"))
+                .ok_or_else(|| anyhow!("{label}.cases[{k}] has no `value`"))?;
+            shift(value, delta, &format!("{label}.cases[{k}].value"))?;
         }
         return Ok(());
     }
-    bail!("pairs.{pair}.{key} cannot be varied")
+    let (list, all) = varied_list(t, label)?;
+    let arr = t
+        .get_mut(list)
+        .and_then(|a| a.as_array_mut())
+        .ok_or_else(|| anyhow!("{label}: no `{list}` array"))?;
+    for k in 0..arr.len() {
+        if k > 0 && !all {
+            break;
+        }
+        let x = number(arr.get(k).unwrap())
+            .ok_or_else(|| anyhow!("{label}.{list}[{k}] is not a number"))?;
+        arr.replace(k, x + delta);
+    }
+    Ok(())
+}
+
+/// The numbers a value form holds that [`shift`] moves: the number, each `y` of an
+/// `interpolate` table, the constant of a `polynomial`, those of every case's value.
+fn numbers_in(v: &toml_edit::Value, label: &str) -> Result<Vec<f64>> {
+    if let Some(x) = number(v) {
+        return Ok(vec![x]);
+    }
+    let t = v
+        .as_inline_table()
+        .ok_or_else(|| anyhow!("{label} cannot be varied"))?;
+    if let Some(cases) = t.get("cases") {
+        let cases = cases
+            .as_array()
+            .ok_or_else(|| anyhow!("{label}.cases is not a list"))?;
+        let mut all = Vec::new();
+        for (k, case) in cases.iter().enumerate() {
+            let value = case
+                .as_inline_table()
+                .and_then(|c| c.get("value"))
+                .ok_or_else(|| anyhow!("{label}.cases[{k}] has no `value`"))?;
+            all.extend(numbers_in(value, &format!("{label}.cases[{k}].value"))?);
+        }
+        return Ok(all);
+    }
+    let (list, all) = varied_list(t, label)?;
+    let arr = t
+        .get(list)
+        .and_then(|a| a.as_array())
+        .ok_or_else(|| anyhow!("{label}: no `{list}` array"))?;
+    Ok(arr
+        .iter()
+        .take(if all { arr.len() } else { 1 })
+        .filter_map(number)
+        .collect())
 }
 
 /// Adds `slope * (c - mid)` to `pairs.PAIR.KEY` along condition `c` (mid the middle of its
@@ -97,7 +191,7 @@ pub fn add_slope(
         .split_once('.')
         .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
     let mid = 0.5 * (lo + hi);
-    let table = table_mut(doc, pair)?;
+    let table = table_mut(doc, pair, key)?;
     let current = table.get(key).and_then(|i| i.as_value().cloned());
     let base = match &current {
         None => Some(0.0),
@@ -234,42 +328,19 @@ pub fn has_candidate(model: &Model, name: &str, what: &str) -> Result<()> {
     )
 }
 
-/// The numbers `pairs.PAIR.KEY` holds: the number, each `y` of an `interpolate` table, or
-/// the constant of a `polynomial`; a missing key holds 0. What [`add_to`] shifts.
+/// The numbers `pairs.PAIR.KEY` holds (see [`add_to`] for where it looks); a missing key
+/// holds 0. What [`add_to`] shifts.
 pub fn values_of(doc: &toml_edit::DocumentMut, path: &str) -> Result<Vec<f64>> {
     let (pair, key) = path
         .split_once('.')
         .ok_or_else(|| anyhow!("`{path}`: expected PAIR.KEY"))?;
-    let table = if pair == "particles" {
-        match doc.get("particles").and_then(|t| t.as_table_like()) {
-            Some(t) => t,
-            None => return Ok(vec![0.0]),
-        }
-    } else {
-        doc.get("pairs")
-            .and_then(|p| p.get(pair))
-            .and_then(|t| t.as_table_like())
-            .ok_or_else(|| anyhow!("the model has no [pairs.{pair}]"))?
-    };
-    let Some(v) = table.get(key).and_then(|i| i.as_value()) else {
+    let Some(table) = table(doc, pair, key)? else {
         return Ok(vec![0.0]);
     };
-    if let Some(x) = number(v) {
-        return Ok(vec![x]);
+    match table.get(key).and_then(|i| i.as_value()) {
+        None => Ok(vec![0.0]),
+        Some(v) => numbers_in(v, &format!("pairs.{pair}.{key}")),
     }
-    let t = v
-        .as_inline_table()
-        .ok_or_else(|| anyhow!("pairs.{pair}.{key} cannot be varied"))?;
-    let (list, all) = varied_list(t, pair, key)?;
-    let arr = t
-        .get(list)
-        .and_then(|a| a.as_array())
-        .ok_or_else(|| anyhow!("pairs.{pair}.{key}: no `{list}` array"))?;
-    Ok(arr
-        .iter()
-        .take(if all { arr.len() } else { 1 })
-        .filter_map(number)
-        .collect())
 }
 
 #[cfg(test)]
@@ -363,6 +434,49 @@ mod tests {
         );
         // A polynomial cannot take a slope.
         assert!(add_slope(&mut d, "soil-soil.poly", "moisture_pct", 3.0, 12.0, 0.02).is_err());
+    }
+
+    #[test]
+    fn bond_keys_and_cases_tables_are_shifted_where_the_model_has_them() {
+        let mut d: toml_edit::DocumentMut = concat!(
+            "[pairs.soil-soil]\nfriction = 0.8\n",
+            "[bond.pairs.soil-soil]\nnormal_stiffness_per_area = 1.0e8\n",
+            "critical_shear_stress = { cases = [\n",
+            "  { when = { moisture_pct = 6 }, value = { interpolate = \"firmness_mpa\", x = [0.34, 2.76], y = [16500.0, 62600.0] } },\n",
+            "  { when = { firmness_mpa = 1.55 }, value = 58700.0 },\n",
+            "] }\n",
+        )
+        .parse()
+        .unwrap();
+        assert_eq!(
+            values_of(&d, "soil-soil.critical_shear_stress").unwrap(),
+            vec![16500.0, 62600.0, 58700.0]
+        );
+        add_to(&mut d, "soil-soil.critical_shear_stress", 1000.0).unwrap();
+        add_to(&mut d, "soil-soil.normal_stiffness_per_area", 1.0e8).unwrap();
+        assert_eq!(
+            values_of(&d, "soil-soil.critical_shear_stress").unwrap(),
+            vec![17500.0, 63600.0, 59700.0]
+        );
+        assert_eq!(
+            d["bond"]["pairs"]["soil-soil"]["normal_stiffness_per_area"].as_float(),
+            Some(2.0e8)
+        );
+        // Nothing leaked into [pairs.soil-soil]; a key neither table has goes there.
+        assert!(
+            d["pairs"]["soil-soil"]
+                .get("critical_shear_stress")
+                .is_none()
+        );
+        add_to(&mut d, "soil-soil.twisting_friction", 0.5).unwrap();
+        assert_eq!(
+            d["pairs"]["soil-soil"]["twisting_friction"].as_float(),
+            Some(0.5)
+        );
+        // The conditions of each case are kept.
+        let text = d.to_string();
+        assert!(text.contains("when = { moisture_pct = 6 }"), "{text}");
+        assert!(text.contains("when = { firmness_mpa = 1.55 }"), "{text}");
     }
 
     #[test]
