@@ -171,18 +171,40 @@ pub fn only_where(
     toml_edit::Value::InlineTable(t)
 }
 
-/// The model's value of `p` as written (`[pairs.PAIR]`, else `[bond.pairs.PAIR]`).
+/// Where the model keeps `p`: `[pairs.PAIR]`, or `[bond.pairs.PAIR]` where only that has it.
+fn home(doc: &toml_edit::DocumentMut, p: &Param) -> &'static [&'static str] {
+    let has = |path: &[&str]| {
+        let mut item = doc.as_item();
+        for part in path
+            .iter()
+            .copied()
+            .chain([p.pair.as_str(), p.key.as_str()])
+        {
+            match item.get(part) {
+                Some(next) => item = next,
+                None => return false,
+            }
+        }
+        true
+    };
+    if !has(&["pairs"]) && has(&["bond", "pairs"]) {
+        &["bond", "pairs"]
+    } else {
+        &["pairs"]
+    }
+}
+
+/// The model's value of `p` as written (see [`home`]).
 fn current(doc: &toml_edit::DocumentMut, p: &Param) -> Option<toml_edit::Value> {
-    let from_pairs = doc
-        .get("pairs")
-        .and_then(|t| t.get(&p.pair))
-        .and_then(|t| t.get(&p.key));
-    let from_bond = doc
-        .get("bond")
-        .and_then(|t| t.get("pairs"))
-        .and_then(|t| t.get(&p.pair))
-        .and_then(|t| t.get(&p.key));
-    from_pairs.or(from_bond).and_then(|i| i.as_value()).cloned()
+    let mut item = doc.as_item();
+    for part in home(doc, p)
+        .iter()
+        .copied()
+        .chain([p.pair.as_str(), p.key.as_str()])
+    {
+        item = item.get(part)?;
+    }
+    item.as_value().cloned()
 }
 
 /// The starting model with each parameter set to one value (a joint calibration), written
@@ -212,7 +234,7 @@ pub fn write_constants(
     std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
 }
 
-/// Sets `p` to `value` in `[pairs.PAIR]` or, where only that has it, `[bond.pairs.PAIR]`.
+/// Sets `p` to `value` where the model keeps it ([`home`]).
 fn set(
     doc: &mut toml_edit::DocumentMut,
     from: &Path,
@@ -220,26 +242,14 @@ fn set(
     value: toml_edit::Value,
     by: &str,
 ) -> Result<()> {
-    let in_pairs = doc
-        .get("pairs")
-        .and_then(|t| t.get(&p.pair))
-        .and_then(|t| t.get(&p.key))
-        .is_some();
-    let in_bond = doc
-        .get("bond")
-        .and_then(|t| t.get("pairs"))
-        .and_then(|t| t.get(&p.pair))
-        .and_then(|t| t.get(&p.key))
-        .is_some();
-    let pair = if in_bond && !in_pairs {
-        doc["bond"]["pairs"][&p.pair]
-            .as_table_like_mut()
-            .ok_or_else(|| anyhow!("{}: no [bond.pairs.{}]", from.display(), p.pair))?
-    } else {
-        doc["pairs"][&p.pair]
-            .as_table_like_mut()
-            .ok_or_else(|| anyhow!("{}: no [pairs.{}]", from.display(), p.pair))?
-    };
+    let path = home(doc, p);
+    let mut table = doc.as_item_mut();
+    for part in path.iter().copied().chain([p.pair.as_str()]) {
+        table = &mut table[part];
+    }
+    let pair = table
+        .as_table_like_mut()
+        .ok_or_else(|| anyhow!("{}: no [{}.{}]", from.display(), path.join("."), p.pair))?;
     let mut item = toml_edit::value(value);
     if let Some(v) = item.as_value_mut() {
         v.decor_mut()
