@@ -21,7 +21,7 @@ use crate::error::{KernelError, Result};
 use crate::factory::Factory;
 use crate::neighbor::{CHUNK, PairList};
 use crate::particles::Particles;
-use crate::timestep::{WARN_FRACTION, rayleigh_time};
+use crate::timestep::{BOND_WARN_FRACTION, WARN_FRACTION, rayleigh_time};
 use crate::wall::{Hit, Wall};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -796,6 +796,7 @@ impl Simulation {
         let list = &mut self.pairs;
         let stride = list.stride;
         let mut formed = 0;
+        let mut shortest = f64::INFINITY;
         for k in 0..list.len() {
             let (i, j) = (list.i[k] as usize, list.j[k] as usize);
             let h = &mut list.history[k * stride..(k + 1) * stride];
@@ -803,17 +804,25 @@ impl Simulation {
             if self.retired_bonds.contains_key(&key) {
                 continue;
             }
-            if self.model.form_bond(
-                p.material[i] as usize,
-                p.material[j] as usize,
-                (p.radius[i], p.radius[j]),
-                (p.position[j] - p.position[i]).length(),
-                h,
-            ) {
+            let (a, b) = (p.material[i] as usize, p.material[j] as usize);
+            let r = (p.radius[i], p.radius[j]);
+            if self
+                .model
+                .form_bond(a, b, r, (p.position[j] - p.position[i]).length(), h)
+            {
                 formed += 1;
+                let mass = p.mass[i].min(p.mass[j]);
+                if let Some(t) = self.model.bond_time_scale(a, b, mass, r) {
+                    shortest = shortest.min(t);
+                }
             }
         }
         self.bonded |= formed > 0;
+        if let Some(w) = bond_step_warning(self.dt, shortest) {
+            if !self.warnings.contains(&w) {
+                self.warnings.push(w);
+            }
+        }
         formed
     }
 
@@ -928,6 +937,18 @@ impl Simulation {
 
 /// What is wrong with a particle after its kick, if anything.
 #[inline]
+/// The warning for a step `dt` too long for the shortest bond time scale `t_b` (s) formed.
+fn bond_step_warning(dt: f64, t_b: f64) -> Option<String> {
+    (dt > BOND_WARN_FRACTION * t_b).then(|| {
+        format!(
+            "time step {dt:.3e} s is {:.0} % of the stiffest bond's time scale sqrt(m / (S A)) = {t_b:.3e} s; above {:.0} % bonded particles may gain energy until the run blows up: shorten the step to {:.3e} s or soften the bonds",
+            100.0 * dt / t_b,
+            100.0 * BOND_WARN_FRACTION,
+            0.8 * BOND_WARN_FRACTION * t_b
+        )
+    })
+}
+
 fn check(x: DVec3, v: DVec3, w: DVec3, limit2: f64, dom: Aabb) -> Option<Failure> {
     if !(x.is_finite() && v.is_finite() && w.is_finite()) {
         Some(Failure::NonFinite)

@@ -611,3 +611,29 @@ fn in_compression_the_bond_adds_to_the_hertz_force() {
     }
     assert!(touching > 100);
 }
+
+/// The Rayleigh step does not see bonds: forming a bond whose spring the step cannot resolve
+/// earns a warning naming the bond's time scale sqrt(m / (S A)); a step well inside it does not.
+#[test]
+fn a_step_too_long_for_the_bonds_is_warned_about_when_they_form() {
+    // Soil-dense spheres: m = rho 4/3 pi R^3; the stiffer spring is S_N (> S_T).
+    let mass = RHO * 4.0 / 3.0 * PI * R.powi(3);
+    let t_b = (mass / (S_N * PI * R * R)).sqrt();
+    let warned = |dt: f64| {
+        let mut p = Particles::default();
+        p.push(DVec3::new(-0.5 * SPACING, 0.0, 0.0), DVec3::ZERO, R, RHO, 0);
+        p.push(DVec3::new(0.5 * SPACING, 0.0, 0.0), DVec3::ZERO, R, RHO, 0);
+        let mut s = sim(bond_model(&[]), p, vec![], dt, DVec3::ZERO, 1);
+        let before = s.warnings.len();
+        assert_eq!(s.form_bonds(), 1);
+        s.warnings[before..].to_vec()
+    };
+    let long = warned(0.2 * t_b);
+    assert_eq!(long.len(), 1, "{long:?}");
+    assert!(
+        long[0].contains("bond") && long[0].contains(&format!("{t_b:.3e}")),
+        "{}",
+        long[0]
+    );
+    assert!(warned(0.05 * t_b).is_empty());
+}

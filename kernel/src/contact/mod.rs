@@ -169,6 +169,11 @@ pub trait BondLaw: Send + Sync {
     fn force(&self, c: &Contact, history: &mut [f64]) -> Option<ContactOut>;
     /// The loads kept in `history`.
     fn loads(&self, history: &[f64]) -> BondLoads;
+    /// The oscillation time scale (s) of a bond between particles of radius `r_i`, `r_j`,
+    /// the lighter of mass `mass` (kg): sqrt(m / k) with k the bond's stiffest spring. The
+    /// Rayleigh step does not see it; `Simulation::form_bonds` warns when the step is too
+    /// long for it.
+    fn time_scale(&self, mass: f64, r_i: f64, r_j: f64) -> f64;
 }
 
 /// Which slot a law fills.

@@ -421,6 +421,15 @@ impl ContactModel {
         true
     }
 
+    /// The bond's time scale between materials `a` and `b` (see [`BondLaw::time_scale`]), or
+    /// `None` when that pair has no bond law.
+    pub fn bond_time_scale(&self, a: usize, b: usize, mass: f64, r: (f64, f64)) -> Option<f64> {
+        self.pairs[a * self.materials.len() + b]
+            .as_ref()
+            .and_then(|l| l.bond.as_ref())
+            .map(|bond| bond.time_scale(mass, r.0, r.1))
+    }
+
     /// The loads of a bonded pair (zero once broken) and the time it broke, or `None` when
     /// the pair was never bonded.
     pub fn bond_loads(

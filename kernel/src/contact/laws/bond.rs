@@ -35,9 +35,11 @@
 //! stretch at break, sigma_c / S_n, which can exceed a particle diameter and would fill the
 //! lists of every pair with partners that never touch.
 //!
-//! Stability: the bond springs S_n A and S_t A must be resolved by the time step (roughly
-//! dt < 0.2 sqrt(m / (S_n A)) for the lightest bonded particle), which the Rayleigh-time
-//! check does not cover.
+//! Stability: the bond springs S_n A and S_t A must be resolved by the time step, which the
+//! Rayleigh-time check does not cover: `Simulation::form_bonds` warns when dt exceeds
+//! `timestep::BOND_WARN_FRACTION` of sqrt(m / (max(S_n, S_t) A)) for the lightest bonded
+//! particle (each particle carries several bonds in parallel, with their bending and
+//! twisting springs, so the usable fraction is well below the single spring's 2).
 //!
 //! Reference: Potyondy & Cundall (2004) Int. J. Rock Mech. Min. Sci. 41:1329-1364; EDEM
 //! Bonding V1 (Altair EDEM Creator documentation).
@@ -194,6 +196,13 @@ impl BondLaw for Bond {
             torque_i: moment + (n * c.arm_i).cross(f_t),
             torque_j,
         })
+    }
+
+    /// sqrt(m / (max(S_n, S_t) A)), A = pi R_B^2: the period of the bond's stiffest spring
+    /// over 2 pi.
+    fn time_scale(&self, mass: f64, r_i: f64, r_j: f64) -> f64 {
+        let r_b = self.radius_ratio * r_i.min(r_j);
+        (mass / (self.s_n.max(self.s_t) * PI * r_b * r_b)).sqrt()
     }
 
     fn loads(&self, h: &[f64]) -> BondLoads {
