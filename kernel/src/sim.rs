@@ -935,8 +935,6 @@ impl Simulation {
     }
 }
 
-/// What is wrong with a particle after its kick, if anything.
-#[inline]
 /// The warning for a step `dt` too long for the shortest bond time scale `t_b` (s) formed.
 fn bond_step_warning(dt: f64, t_b: f64) -> Option<String> {
     (dt > BOND_WARN_FRACTION * t_b).then(|| {
@@ -949,6 +947,8 @@ fn bond_step_warning(dt: f64, t_b: f64) -> Option<String> {
     })
 }
 
+/// What is wrong with a particle after its kick, if anything.
+#[inline]
 fn check(x: DVec3, v: DVec3, w: DVec3, limit2: f64, dom: Aabb) -> Option<Failure> {
     if !(x.is_finite() && v.is_finite() && w.is_finite()) {
         Some(Failure::NonFinite)

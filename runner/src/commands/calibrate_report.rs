@@ -2,6 +2,7 @@
 //! markdown summary.
 
 use super::calibrate::{CalibrateArgs, ConditionResult, Param, describe};
+use super::model_edit::in_bond_only;
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -173,21 +174,7 @@ pub fn only_where(
 
 /// Where the model keeps `p`: `[pairs.PAIR]`, or `[bond.pairs.PAIR]` where only that has it.
 fn home(doc: &toml_edit::DocumentMut, p: &Param) -> &'static [&'static str] {
-    let has = |path: &[&str]| {
-        let mut item = doc.as_item();
-        for part in path
-            .iter()
-            .copied()
-            .chain([p.pair.as_str(), p.key.as_str()])
-        {
-            match item.get(part) {
-                Some(next) => item = next,
-                None => return false,
-            }
-        }
-        true
-    };
-    if !has(&["pairs"]) && has(&["bond", "pairs"]) {
+    if in_bond_only(doc, &p.pair, &p.key) {
         &["bond", "pairs"]
     } else {
         &["pairs"]

@@ -73,8 +73,9 @@ fn table<'a>(
     Ok(item.as_table_like())
 }
 
-/// Whether `key` is in `[bond.pairs.PAIR]` and not in `[pairs.PAIR]`.
-fn in_bond_only(doc: &toml_edit::DocumentMut, pair: &str, key: &str) -> bool {
+/// Whether `key` is in `[bond.pairs.PAIR]` and not in `[pairs.PAIR]`: where a `PAIR.KEY`
+/// parameter lives (bond stiffness and strength), for every command that edits one.
+pub fn in_bond_only(doc: &toml_edit::DocumentMut, pair: &str, key: &str) -> bool {
     let has = |item: Option<&toml_edit::Item>| item.and_then(|t| t.get(key)).is_some();
     !has(doc.get("pairs").and_then(|t| t.get(pair)))
         && has(doc
