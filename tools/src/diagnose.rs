@@ -225,6 +225,32 @@ pub fn absorbed(residual: &[f64], jacobian: &DMatrix<f64>) -> Vec<f64> {
         .collect()
 }
 
+/// The recalibration that [`absorbed`] assumes: the least-squares change of each free
+/// parameter, b = X^+ r (minimum norm where the parameters are confounded), in each
+/// parameter's own unit (X's columns are per unit of the parameter). It is linear: a shift
+/// far outside the range the sensitivities were measured over is an extrapolation, and the
+/// residuals it predicts are not to be trusted.
+pub fn recalibration(residual: &[f64], jacobian: &DMatrix<f64>) -> Vec<f64> {
+    let maker = ResidualMaker::new(jacobian);
+    match &maker.svd {
+        None => vec![0.0; jacobian.ncols()],
+        Some(svd) => svd
+            .solve(&DVector::from_column_slice(residual), maker.tolerance)
+            .expect("both factors computed")
+            .iter()
+            .copied()
+            .collect(),
+    }
+}
+
+/// Whether a free parameter's measured effect, column `x` of the Jacobian with estimate
+/// variances `var`, stands above the noise of its own estimate (|x|^2 > sum var: the rule
+/// that makes a candidate [`Unidentified::Unmeasured`]).
+pub fn measurable(x: &[f64], var: &[f64]) -> bool {
+    let xx: f64 = x.iter().map(|v| v * v).sum();
+    xx > 0.0 && xx > var.iter().sum::<f64>()
+}
+
 /// Holm's step-down correction of `p_raw` into `p_value` (monotone, capped at 1).
 fn holm(scores: &mut [Score]) {
     let k = scores.len();
@@ -247,6 +273,28 @@ mod tests {
 
     fn normal(rng: &mut ChaCha8Rng, n: usize) -> Vec<f64> {
         (0..n).map(|_| StandardNormal.sample(rng)).collect()
+    }
+
+    #[test]
+    fn recalibration_recovers_the_shift_that_made_the_residuals() {
+        let (x, _) = problem(11);
+        let b = [0.7, -2.5];
+        let r: Vec<f64> = (0..x.nrows())
+            .map(|i| x[(i, 0)] * b[0] + x[(i, 1)] * b[1])
+            .collect();
+        let got = recalibration(&r, &x);
+        for (g, want) in got.iter().zip(b) {
+            assert!((g - want).abs() < 1e-9, "{got:?} against {b:?}");
+        }
+        // And what it leaves is what `absorbed` reports: nothing.
+        assert!(absorbed(&r, &x).iter().all(|v| v.abs() < 1e-9));
+    }
+
+    #[test]
+    fn a_parameter_is_measurable_only_above_its_estimate_noise() {
+        assert!(measurable(&[3.0, 4.0], &[1.0, 1.0]));
+        assert!(!measurable(&[1.0, 1.0], &[1.5, 1.5]));
+        assert!(!measurable(&[0.0, 0.0], &[]));
     }
 
     /// m rows, 2 free parameters, 3 candidates with random signatures; the third is made a

@@ -15,7 +15,7 @@
 use super::calibrate::{Param, parse_param};
 use super::compare::{Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
-use super::model_edit::{add_to, switch_on, variant};
+use super::model_edit::{add_to, switch_on, values_of, variant};
 use crate::lab::model::Model;
 use crate::sweep::execute;
 use anyhow::{Result, bail};
@@ -64,6 +64,24 @@ pub struct DiagnoseArgs {
     /// (one command at a time per cache).
     #[arg(long)]
     pub cache: Option<PathBuf>,
+}
+
+/// The linear recalibration of one free parameter that the "after recalibration" numbers
+/// assume, as written.
+#[derive(Debug, Clone, Serialize)]
+pub struct Recalibrated {
+    /// `PAIR.KEY`.
+    pub parameter: String,
+    /// The numbers the model holds for it (one per interpolation point or case).
+    pub now: Vec<f64>,
+    /// The least-squares shift, in the parameter's unit, added to each.
+    pub shift: f64,
+    pub after: Vec<f64>,
+    /// The range given with `--param`, over which its sensitivity was measured.
+    pub range: [f64; 2],
+    pub within_range: bool,
+    /// Whether its effect on the measurements stands above the noise of its estimate.
+    pub measurable: bool,
 }
 
 /// A candidate's result, as written.
@@ -293,6 +311,26 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         .collect();
     let scores = score_tests(&residual, &x, &candidates);
     let absorbed = tilth_tools::diagnose::absorbed(&residual, &x);
+    let shift = tilth_tools::diagnose::recalibration(&residual, &x);
+    let doc: toml_edit::DocumentMut = text.parse()?;
+    let recalibrated: Vec<Recalibrated> = params
+        .iter()
+        .enumerate()
+        .map(|(c, p)| {
+            let path = format!("{}.{}", p.pair, p.key);
+            let now = values_of(&doc, &path)?;
+            let after: Vec<f64> = now.iter().map(|v| v + shift[c]).collect();
+            Ok(Recalibrated {
+                within_range: after.iter().all(|v| (p.low..=p.high).contains(v)),
+                measurable: tilth_tools::diagnose::measurable(&sens(2 + c), &sens_var(2 + c)),
+                parameter: path,
+                now,
+                shift: shift[c],
+                after,
+                range: [p.low, p.high],
+            })
+        })
+        .collect::<Result<_>>()?;
 
     // Per observable RMSE after recalibration, and after adding each candidate.
     let rmse_by_obs = |z: &[f64]| -> BTreeMap<String, f64> {
@@ -339,13 +377,22 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "rows_dropped": dropped,
         "rmse_now": now,
         "rmse_after_recalibration": before,
+        "recalibration": recalibrated,
         "candidates": diagnosed,
     });
     std::fs::write(
         args.out.join("diagnosis.json"),
         serde_json::to_vec_pretty(&json)?,
     )?;
-    let md = report(args, &params, &diagnosed, &now, &before, &dropped);
+    let md = report(
+        args,
+        &params,
+        &diagnosed,
+        &now,
+        &before,
+        &recalibrated,
+        &dropped,
+    );
     std::fs::write(args.out.join("diagnosis.md"), &md)?;
     out.write_all(md.as_bytes())?;
     writeln!(
@@ -362,6 +409,7 @@ fn report(
     d: &[Diagnosed],
     now: &BTreeMap<String, f64>,
     before: &BTreeMap<String, f64>,
+    recalibrated: &[Recalibrated],
     dropped: &[String],
 ) -> String {
     let mut md = format!(
@@ -389,6 +437,9 @@ fn report(
             "- {k}: RMSE now {v:.4}; what recalibrating the free parameters alone would leave: {:.4}\n",
             before[k]
         );
+    }
+    if !recalibrated.is_empty() {
+        md += &recalibration_table(recalibrated);
     }
     md += "\n| rank | candidate | statistic | p (corrected) | strength | RMSE drop | identifiable |\n|---|---|---|---|---|---|---|\n";
     for (r, c) in d.iter().enumerate() {
@@ -471,4 +522,97 @@ fn report(
     }
     md += "\n";
     md
+}
+
+/// The linear recalibration behind the "would leave" numbers, and a warning when it is an
+/// extrapolation: a shift out of the range the sensitivities were measured over, or a
+/// parameter whose effect was not measured (its least-squares shift is then noise).
+fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
+    let nums = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut md = "\nThat recalibration, linearised (each free parameter's least-squares shift):\n\n| parameter | now | shift | after | range | |\n|---|---|---|---|---|---|\n".to_string();
+    for r in recalibrated {
+        let mut flags = vec![];
+        if !r.within_range {
+            flags.push("leaves its range");
+        }
+        if !r.measurable {
+            flags.push("no measurable effect");
+        }
+        md += &format!(
+            "| {} | {} | {:+.4} | {} | {} .. {} | {} |\n",
+            r.parameter,
+            nums(&r.now),
+            r.shift,
+            nums(&r.after),
+            r.range[0],
+            r.range[1],
+            flags.join(", ")
+        );
+    }
+    let out: Vec<&str> = recalibrated
+        .iter()
+        .filter(|r| !r.within_range)
+        .map(|r| r.parameter.as_str())
+        .collect();
+    let flat: Vec<&str> = recalibrated
+        .iter()
+        .filter(|r| !r.measurable)
+        .map(|r| r.parameter.as_str())
+        .collect();
+    if !out.is_empty() || !flat.is_empty() {
+        md += "\n**The \"would leave\" numbers are an extrapolation, not a prediction.**";
+        if !out.is_empty() {
+            md += &format!(
+                " The shift takes {} outside the range its sensitivity was measured over, where the linear model has no support.",
+                out.join(", ")
+            );
+        }
+        if !flat.is_empty() {
+            md += &format!(
+                " {} had no effect on these measurements above the noise of its estimate, so its shift is fitted to noise: fix it, measure it with more replicates or a wider range, or add a test that responds to it.",
+                flat.join(", ")
+            );
+        }
+        md += " The candidates' statistics and p-values do not rest on this number.\n";
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn param(within_range: bool, measurable: bool) -> Recalibrated {
+        Recalibrated {
+            parameter: "soil-soil.rolling_friction".into(),
+            now: vec![0.2, 0.3],
+            shift: 0.5,
+            after: vec![0.7, 0.8],
+            range: [0.05, 0.45],
+            within_range,
+            measurable,
+        }
+    }
+
+    #[test]
+    fn an_extrapolated_recalibration_is_named_as_one() {
+        let ok = recalibration_table(&[param(true, true)]);
+        assert!(ok.contains("| soil-soil.rolling_friction | 0.2000, 0.3000 | +0.5000 | 0.7000, 0.8000 | 0.05 .. 0.45 |"), "{ok}");
+        assert!(!ok.contains("extrapolation"), "{ok}");
+        let out = recalibration_table(&[param(false, true)]);
+        assert!(
+            out.contains("leaves its range") && out.contains("outside the range"),
+            "{out}"
+        );
+        let flat = recalibration_table(&[param(true, false)]);
+        assert!(
+            flat.contains("no measurable effect") && flat.contains("fitted to noise"),
+            "{flat}"
+        );
+    }
 }

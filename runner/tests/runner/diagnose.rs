@@ -75,7 +75,35 @@ fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
     // Identifiable candidates rank before the others.
     let identifiable: Vec<bool> = cands.iter().map(|c| c["identifiable"] == true).collect();
     assert!(identifiable.windows(2).all(|w| w[0] || !w[1]), "{cands:?}");
+    // The recalibration behind "would leave": the model's numbers, each shifted by the one
+    // least-squares shift, checked against the range given.
+    let recal = json["recalibration"].as_array().unwrap();
+    assert_eq!(recal.len(), 1, "{recal:?}");
+    let r = &recal[0];
+    assert_eq!(r["parameter"], "soil-soil.rolling_friction");
+    let nums = |k: &str| -> Vec<f64> {
+        r[k].as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!(nums("now"), vec![0.188, 0.15, 0.193, 0.338], "{r}");
+    let shift = r["shift"].as_f64().unwrap();
+    let after = nums("after");
+    for (a, n) in after.iter().zip(nums("now")) {
+        assert_eq!(*a, n + shift, "{r}");
+    }
+    assert_eq!(
+        r["within_range"].as_bool().unwrap(),
+        after.iter().all(|v| (0.0..=0.5).contains(v)),
+        "{r}"
+    );
     let md = std::fs::read_to_string(dir.join("out/diagnosis.md")).unwrap();
+    assert!(
+        md.contains("| soil-soil.rolling_friction | 0.1880, 0.1500, 0.1930, 0.3380 |"),
+        "{md}"
+    );
     assert!(md.contains("more_rolling is not identifiable"), "{md}");
     assert!(md.contains("It is not a discovery"), "{md}");
 }
