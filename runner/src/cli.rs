@@ -1,7 +1,8 @@
 //! The command-line surface.
 
 use crate::commands::{
-    bench, calibrate, compare, diagnose, fit, laws, project_report, reduce, rsm, run, sweep, synth,
+    bench, calibrate, check, compare, diagnose, fit, laws, project_report, reduce, rsm, run, sweep,
+    synth,
 };
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -30,6 +31,9 @@ pub enum Command {
     Reduce(reduce::ReduceArgs),
     /// Simulate every measured condition of a data file and compare (compare.json/csv/md).
     Compare(compare::CompareArgs),
+    /// Check a measurement file: every row (and, with --model, its ranges), and whether its
+    /// direct shear and UCS rows can come from one material at all.
+    Check(check::CheckArgs),
     /// Which candidate effect ([candidates] in the model file) explains the residuals: a
     /// score test per candidate after what the free parameters absorb.
     Diagnose(diagnose::DiagnoseArgs),
@@ -66,6 +70,7 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Sweep { command } => sweep::sweep(&command, out),
         Command::Reduce(args) => reduce::reduce_cmd(&args, out),
         Command::Compare(args) => compare::compare(&args, out),
+        Command::Check(args) => check::check(&args, out),
         Command::Rsm { command } => rsm::rsm(&command, out),
         Command::Calibrate(args) => calibrate::calibrate(&args, out),
         Command::Synth(args) => synth::synth(&args, out),

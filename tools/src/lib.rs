@@ -3,6 +3,7 @@
 
 pub mod calibrate;
 pub mod compare;
+pub mod consistency;
 pub mod design;
 pub mod diagnose;
 pub mod reduce;

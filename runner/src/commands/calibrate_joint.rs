@@ -83,6 +83,12 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     }
     let (params, model_path, model) = load_params(args)?;
     let rows = select_rows(args, &model, &tests)?;
+    // Before hours of runs: can the selected shear and UCS rows come from one material?
+    let shear_ucs = super::check::shear_ucs_pairs(&rows);
+    let allowed = super::check::describe(&shear_ucs);
+    if !args.quiet && shear_ucs.iter().any(|p| !p.check.compatible) {
+        eprintln!("warning: {allowed}");
+    }
     let stop = execute::stop_on_signals()?;
     // Each run reads its own measurement's observable.
     let observable = |std: usize| {
@@ -377,12 +383,16 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         "linearised": lin,
         "posterior": post,
         "calibrated_model": model_out,
+        "shear_ucs": shear_ucs,
     });
     std::fs::write(
         args.out.join("calibration.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
-    let md = markdown(args, &params, &setting, &rows_out, &iterations, &lin, &post);
+    let mut md = markdown(args, &params, &setting, &rows_out, &iterations, &lin, &post);
+    if !allowed.is_empty() {
+        md += &format!("\n## What the measurements allow\n\n{allowed}");
+    }
     std::fs::write(args.out.join("calibration.md"), &md)?;
     write!(out, "{md}")?;
     Ok(())

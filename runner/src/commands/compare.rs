@@ -461,6 +461,8 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
     let verdicts = compare_stats::analyse(&analysed);
     let words = compare_stats::summary(&analysed, &verdicts);
     let plots = write_plots(&args.out, &analysed)?;
+    let measured: Vec<Measurement> = rows.iter().map(|r| r.measurement.clone()).collect();
+    let shear_ucs = super::check::shear_ucs_pairs(&measured);
     let created = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64());
@@ -475,6 +477,7 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
         "verdicts": verdicts,
         "summary": words,
         "plots": plots,
+        "shear_ucs": shear_ucs,
     });
     std::fs::write(
         args.out.join("compare.json"),
@@ -535,6 +538,10 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
         );
     }
     md += &format!("\n## Where the model fails\n\n{words}\n");
+    let allowed = super::check::describe(&shear_ucs);
+    if !allowed.is_empty() {
+        md += &format!("\n## What the measurements allow\n\n{allowed}");
+    }
     for p in &plots {
         md += &format!("![{p}]({p})\n");
     }

@@ -4,6 +4,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod calibrate_joint;
 pub mod calibrate_report;
+pub mod check;
 pub mod compare;
 pub mod diagnose;
 pub mod fit;

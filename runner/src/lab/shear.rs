@@ -56,6 +56,11 @@ pub struct ShearParams {
 fn default_box() -> f64 {
     0.0618
 }
+
+/// The shear plane of the box at its default diameter, m^2 (the study's 3000 mm^2).
+pub fn default_shear_area() -> f64 {
+    std::f64::consts::PI * default_box().powi(2) / 4.0
+}
 fn default_height() -> f64 {
     0.020
 }

@@ -2,6 +2,7 @@
 
 mod cache;
 mod calibrate;
+mod check;
 mod config_files;
 mod diagnose;
 mod discovery_proof;
