@@ -106,6 +106,10 @@ pub struct Simulation {
     retired_bonds: BTreeMap<(u32, u32), f64>,
     /// Whether bonds were ever formed; rebuilds then retire the bonded pairs they drop.
     bonded: bool,
+    /// The time and step of the last change of the time step (0 and 0 without one):
+    /// `time = time_origin + (step - step_origin) dt`, a product rather than a running sum.
+    time_origin: f64,
+    step_origin: u64,
     /// Shared so `run` can enter it once; nested `install` calls from inside are direct calls.
     pool: std::sync::Arc<rayon::ThreadPool>,
 }
@@ -292,6 +296,8 @@ impl Simulation {
             warnings,
             rebuilds: 0,
             rayleigh_time: t_r,
+            time_origin: 0.0,
+            step_origin: 0,
             skin,
             extra,
             pairs: PairList::empty(stride),
@@ -386,7 +392,7 @@ impl Simulation {
             wall_disp = wall_disp.max((w.offset - *r0).length());
         }
         self.step += 1;
-        self.time = self.step as f64 * dt;
+        self.time = self.time_origin + (self.step - self.step_origin) as f64 * dt;
         // Factories fill in batches: a new particle forces a list rebuild, so inserting a
         // few every step would rebuild every step.
         let created = if self.step % INSERT_EVERY == 0 {
@@ -858,6 +864,39 @@ impl Simulation {
         }));
         out.sort_unstable_by_key(|b| (b.i, b.j));
         out
+    }
+
+    /// Changes the time step from the next step on, e.g. to the shorter step bonds need
+    /// once they form (a specimen prepared at the contacts' step, then bonded). Velocity
+    /// Verlet is self-starting, so a step of one length may follow one of another; contact
+    /// histories integrate rates with each step's own `dt`. Refuses a step that is not a
+    /// positive number; warns, as at start, above [`WARN_FRACTION`] of the Rayleigh time.
+    pub fn set_dt(&mut self, dt: f64) -> Result<()> {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(KernelError::OutOfRange {
+                key: "dt".into(),
+                value: dt,
+                range: "(0, inf)".into(),
+                unit: "s".into(),
+            });
+        }
+        if dt == self.dt {
+            return Ok(());
+        }
+        self.time_origin = self.time;
+        self.step_origin = self.step;
+        self.dt = dt;
+        if dt > WARN_FRACTION * self.rayleigh_time {
+            let w = format!(
+                "time step {dt:.3e} s is {:.0} % of the Rayleigh time {:.3e} s; EDEM practice is 20-40 %, above that contacts may be unstable",
+                100.0 * dt / self.rayleigh_time,
+                self.rayleigh_time
+            );
+            if !self.warnings.contains(&w) {
+                self.warnings.push(w);
+            }
+        }
+        Ok(())
     }
 
     /// Numbers of intact and of broken bonds.

@@ -95,6 +95,9 @@ pub struct Common<'a> {
 /// A built experiment: the scene (TOML, checked like any scene) and its protocol.
 pub struct Built {
     pub scene: Value,
+    /// The time step the protocol switches to when it forms bonds (the scene's `dt` is the
+    /// preparation's), s; `None` for a test without bonds.
+    pub bonded_dt: Option<f64>,
     pub protocol: Box<dyn Protocol>,
 }
 
@@ -332,11 +335,12 @@ mod tests {
         let text = "format_version = 1\nexperiment = \"ucs\"\nmodel = \"models/li2022.toml\"\ncoarse = true\n[conditions]\nmoisture_pct = 6\nfirmness_mpa = 1.55\n";
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         let built = build(toml::from_str(text).unwrap(), "test", &root, overrides).unwrap();
-        built.scene["simulation"]["dt"].as_float().unwrap()
+        built.bonded_dt.unwrap()
     }
 
     /// A sweep that stiffens the bonds through the scene gets the time step of the stiffer
-    /// bonds: BOND_DT_FRACTION sqrt(m / (S pi r^2)) for the coarse preset's 4 mm grains.
+    /// bonds once they form: BOND_DT_FRACTION sqrt(m / (S pi r^2)) for the coarse preset's
+    /// 4 mm grains.
     #[test]
     fn a_stiffer_bond_set_through_the_scene_shortens_the_time_step() {
         let soft = ucs_dt(&[]);

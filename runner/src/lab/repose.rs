@@ -280,6 +280,7 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
     };
     Ok(Built {
         scene,
+        bonded_dt: None,
         protocol: Box::new(ReposeProtocol {
             p: p.clone(),
             tray,

@@ -145,7 +145,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         );
     }
     let r = 0.5 * p.box_diameter;
-    let (dt, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
+    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
     let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
     // Loose particles need about twice the specimen's height; the platen starts above that.
     let z_mid = 0.5 * p.height;
@@ -157,7 +157,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         ("format_version", Value::Integer(1)),
         (
             "simulation",
-            specimen::simulation(c, dt, duration, flange + 0.02, z_top + 0.02),
+            specimen::simulation(c, steps.prepare, duration, flange + 0.02, z_top + 0.02),
         ),
         ("materials", materials),
         ("contact", contact),
@@ -186,8 +186,16 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     ]);
     Ok(Built {
         scene,
+        bonded_dt: Some(steps.bonded),
         protocol: Box::new(ShearProtocol {
-            prep: Preparation::new(PLATEN, p.compaction_force, p.max_phase_time, z_top, d),
+            prep: Preparation::new(
+                PLATEN,
+                p.compaction_force,
+                p.max_phase_time,
+                z_top,
+                d,
+                steps.bonded,
+            ),
             phase: Phase::Prepare,
             p: p.clone(),
             area,
@@ -262,7 +270,7 @@ impl Protocol for ShearProtocol {
         match self.phase {
             Phase::Prepare => {
                 if self.prep.advance(sim, "direct_shear")? {
-                    self.bonds = sim.form_bonds();
+                    self.bonds = self.prep.bond(sim)?;
                     if self.bonds == 0 {
                         bail!(
                             "direct_shear: no bonds formed after compaction (step {}): the particles do not touch",
@@ -411,6 +419,7 @@ impl Protocol for ShearProtocol {
             "max_inertial_number": self.max_i,
             "particles": sim.particles.len(),
             "bonds_formed": self.bonds,
+            "time_step_bonded_s": self.prep.bonded_dt,
             "bonds_intact": intact,
             "bonds_broken": broken,
             "completed": self.phase == Phase::Done,

@@ -137,7 +137,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     }
     let r = 0.5 * p.mould_diameter;
     let area = std::f64::consts::PI * r * r;
-    let (dt, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
+    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
     let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
     let z_fill = 2.4 * p.height / (p.packing / 0.55);
     let z_top = z_fill + 2.0 * d;
@@ -146,7 +146,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
         ("format_version", Value::Integer(1)),
         (
             "simulation",
-            specimen::simulation(c, dt, duration, r + 0.05, z_top + 0.02),
+            specimen::simulation(c, steps.prepare, duration, r + 0.05, z_top + 0.02),
         ),
         ("materials", materials),
         ("contact", contact),
@@ -182,8 +182,16 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     ]);
     Ok(Built {
         scene,
+        bonded_dt: Some(steps.bonded),
         protocol: Box::new(UcsProtocol {
-            prep: Preparation::new(PLATEN, p.compaction_force, p.max_phase_time, z_top, d),
+            prep: Preparation::new(
+                PLATEN,
+                p.compaction_force,
+                p.max_phase_time,
+                z_top,
+                d,
+                steps.bonded,
+            ),
             phase: Phase::Prepare,
             p: p.clone(),
             area,
@@ -268,7 +276,7 @@ impl Protocol for UcsProtocol {
         match self.phase {
             Phase::Prepare => {
                 if self.prep.advance(sim, "ucs")? {
-                    self.bonds = sim.form_bonds();
+                    self.bonds = self.prep.bond(sim)?;
                     if self.bonds == 0 {
                         bail!(
                             "ucs: no bonds formed after compaction (step {}): the particles do not touch",
@@ -431,6 +439,7 @@ impl Protocol for UcsProtocol {
             "stopped_because": self.stop_reason,
             "particles": sim.particles.len(),
             "bonds_formed": self.bonds,
+            "time_step_bonded_s": self.prep.bonded_dt,
             "bonds_intact": intact,
             "bonds_broken": broken,
             "completed": self.phase == Phase::Done,

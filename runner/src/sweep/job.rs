@@ -172,7 +172,10 @@ fn simulate(
     }
     let origin = format!("{} (run {})", plan.scene.origin, run.id);
     let (prepared, mut protocol) = plan.build(run)?;
-    let rates = plan.record.resolve(prepared.setup.dt)?;
+    // Frame intervals are in steps: resolved again whenever the protocol changes the time
+    // step (bonded specimens), so that frames keep their rates in simulated time.
+    let mut rates = plan.record.resolve(prepared.setup.dt)?;
+    let mut rates_dt = prepared.setup.dt;
     let wall_names: Vec<String> = prepared.info.walls.iter().map(|(n, _)| n.clone()).collect();
     let tray = observe::find_tray(&wall_names, &prepared.wall_shapes);
     let mut units = units();
@@ -240,7 +243,8 @@ fn simulate(
     };
     let record = |sim: &tilth_kernel::sim::Simulation,
                   protocol: &dyn Protocol,
-                  rec: &mut Recorder|
+                  rec: &mut Recorder,
+                  rates: crate::record::FrameRates|
      -> Result<()> {
         let step = sim.step;
         if crate::record::FrameRates::due(rates.particles, step) {
@@ -263,7 +267,7 @@ fn simulate(
     let mut particle_steps: u64 = 0;
     let mut interrupted = false;
     let mut failure = None;
-    record(&sim, protocol.as_ref(), &mut recorder)?;
+    record(&sim, protocol.as_ref(), &mut recorder, rates)?;
     loop {
         if stop.load(Ordering::Relaxed) {
             interrupted = true;
@@ -277,6 +281,10 @@ fn simulate(
                 break;
             }
         };
+        if sim.dt != rates_dt {
+            rates = plan.record.resolve(sim.dt)?;
+            rates_dt = sim.dt;
+        }
         let n = rates
             .steps_to_next(sim.step, k)
             .min(STOP_CHECK - sim.step % STOP_CHECK);
@@ -288,7 +296,7 @@ fn simulate(
         particle_steps += n * before.max(sim.particles.len() as u64);
         let done = (protocol.progress(&sim).clamp(0.0, 1.0) * PROGRESS_SCALE as f64) as u64;
         live.step.store(done, Ordering::Relaxed);
-        record(&sim, protocol.as_ref(), &mut recorder)?;
+        record(&sim, protocol.as_ref(), &mut recorder, rates)?;
     }
     summary.experiment = Some(protocol.summary(&sim)).filter(|v| !v.is_null());
     let wall = t0.elapsed().as_secs_f64();
