@@ -92,10 +92,11 @@ pub const BOND_DT_FRACTION: f64 = 0.08;
 
 /// Largest fraction of the Rayleigh time a specimen is prepared at. A compacted specimen is
 /// a dense packing in which every grain presses on five to seven others, stiffer than the
-/// one contact the Rayleigh time estimates: at the lab's default 35 % the coarse UCS
-/// specimen (soft bonds, seed 1) gained energy while compacted under 12 N, packed to 36 mm
-/// instead of 49 mm and blew up once bonded; at 20 % it packed to 49.01 mm, as at 14 % and
-/// 1.4 % of the Rayleigh time (49.07 and 48.84 mm).
+/// one contact the Rayleigh time estimates: at 35 % (the lab's default `dt_fraction`, right
+/// for the funnel's loose flow) the coarse UCS specimen at 6 % (seed 1) gained energy while
+/// compacted under 12 N and packed to 36 mm instead of 49 mm; at 20 % it packed to 49.01 mm,
+/// as at 14 % and 1.4 % of the Rayleigh time (49.07 and 48.84 mm). (Before, a specimen was
+/// prepared at the bonds' step, which the model's soil-steel bond entry kept at about 14 %.)
 pub const COMPACTION_DT_FRACTION: f64 = 0.2;
 
 /// The time steps of a bonded specimen, s.
