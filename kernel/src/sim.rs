@@ -138,14 +138,7 @@ impl Simulation {
             threads,
             domain,
         } = setup;
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(KernelError::OutOfRange {
-                key: "dt".into(),
-                value: dt,
-                range: "(0, inf)".into(),
-                unit: "s".into(),
-            });
-        }
+        check_dt(dt)?;
         if !(skin >= 0.0 && skin.is_finite()) {
             return Err(KernelError::OutOfRange {
                 key: "skin".into(),
@@ -243,13 +236,7 @@ impl Simulation {
                 mat.poisson_ratio,
             ));
         }
-        let mut warnings = vec![];
-        if dt > WARN_FRACTION * t_r {
-            warnings.push(format!(
-                "time step {dt:.3e} s is {:.0} % of the Rayleigh time {t_r:.3e} s; EDEM practice is 20-40 %, above that contacts may be unstable",
-                100.0 * dt / t_r
-            ));
-        }
+        let warnings: Vec<String> = rayleigh_step_warning(dt, t_r).into_iter().collect();
         let reach = if r_max > 0.0 {
             model.max_reach(r_max)
         } else {
@@ -872,26 +859,14 @@ impl Simulation {
     /// histories integrate rates with each step's own `dt`. Refuses a step that is not a
     /// positive number; warns, as at start, above [`WARN_FRACTION`] of the Rayleigh time.
     pub fn set_dt(&mut self, dt: f64) -> Result<()> {
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(KernelError::OutOfRange {
-                key: "dt".into(),
-                value: dt,
-                range: "(0, inf)".into(),
-                unit: "s".into(),
-            });
-        }
+        check_dt(dt)?;
         if dt == self.dt {
             return Ok(());
         }
         self.time_origin = self.time;
         self.step_origin = self.step;
         self.dt = dt;
-        if dt > WARN_FRACTION * self.rayleigh_time {
-            let w = format!(
-                "time step {dt:.3e} s is {:.0} % of the Rayleigh time {:.3e} s; EDEM practice is 20-40 %, above that contacts may be unstable",
-                100.0 * dt / self.rayleigh_time,
-                self.rayleigh_time
-            );
+        if let Some(w) = rayleigh_step_warning(dt, self.rayleigh_time) {
             if !self.warnings.contains(&w) {
                 self.warnings.push(w);
             }
@@ -972,6 +947,29 @@ impl Simulation {
         }
         h
     }
+}
+
+/// Refuses a time step that is not a positive number.
+fn check_dt(dt: f64) -> Result<()> {
+    if dt > 0.0 && dt.is_finite() {
+        return Ok(());
+    }
+    Err(KernelError::OutOfRange {
+        key: "dt".into(),
+        value: dt,
+        range: "(0, inf)".into(),
+        unit: "s".into(),
+    })
+}
+
+/// The warning for a step `dt` above [`WARN_FRACTION`] of the Rayleigh time `t_r` (s).
+fn rayleigh_step_warning(dt: f64, t_r: f64) -> Option<String> {
+    (dt > WARN_FRACTION * t_r).then(|| {
+        format!(
+            "time step {dt:.3e} s is {:.0} % of the Rayleigh time {t_r:.3e} s; EDEM practice is 20-40 %, above that contacts may be unstable",
+            100.0 * dt / t_r
+        )
+    })
 }
 
 /// The warning for a step `dt` too long for the shortest bond time scale `t_b` (s) formed.
