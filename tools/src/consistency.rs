@@ -30,6 +30,7 @@
 //! Reference: the Mohr circle and failure envelope, e.g. Craig's Soil Mechanics (8th ed.),
 //! ch. 4 (unconfined compression as the triaxial test with sigma_3 = 0).
 
+use plotters::prelude::*;
 use serde::Serialize;
 
 /// The smallest shear force (N) a shear plane of `area` (m^2) under `normal_stress` (Pa) can
@@ -117,6 +118,92 @@ fn band_needed(area: f64, normal_stress: f64, force: f64, ucs: f64) -> f64 {
     hi
 }
 
+/// Colours of the pairs in [`mohr_svg`], in turn.
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+/// A Mohr diagram (SVG) of labelled pairs: each UCS's failure circle (through 0 and q,
+/// upper half) and, in the same colour, the shear test's point (sigma_n, F / A). A point
+/// inside its circle is a pair no single material gives (bound (1)); kPa on both axes,
+/// equal scales.
+pub fn mohr_svg(pairs: &[(String, &ShearUcsCheck)]) -> Result<String, String> {
+    let err = |e: String| format!("Mohr plot: {e}");
+    let kpa = 1e-3;
+    let q_max = pairs.iter().map(|(_, k)| k.ucs_pa).fold(0.0, f64::max);
+    let tau_max = pairs
+        .iter()
+        .map(|(_, k)| k.shear_force_n / k.area_m2)
+        .fold(0.5 * q_max, f64::max);
+    let sigma_max = pairs
+        .iter()
+        .map(|(_, k)| k.normal_stress_pa)
+        .fold(q_max, f64::max);
+    // Room on the right for the legend, clear of the circles.
+    let (xmax, ymax) = (1.4 * kpa * sigma_max, 1.1 * kpa * tau_max);
+    let width = 860u32;
+    let height = (f64::from(width - 90) * ymax / xmax) as u32 + 120;
+    let mut svg = String::new();
+    {
+        let root =
+            SVGBackend::with_string(&mut svg, (width, height.clamp(300, 900))).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "UCS failure circles and shear points: a point inside its circle, no one material",
+                ("sans-serif", 17),
+            )
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..xmax, 0.0..ymax)
+            .map_err(|e| err(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc("normal stress sigma, kPa")
+            .y_desc("shear stress tau, kPa")
+            .draw()
+            .map_err(|e| err(e.to_string()))?;
+        for (k, (label, c)) in pairs.iter().enumerate() {
+            let colour = PALETTE[k % PALETTE.len()];
+            let r = 0.5 * kpa * c.ucs_pa;
+            chart
+                .draw_series(LineSeries::new(
+                    (0..=180).map(|a| {
+                        let t = f64::from(a).to_radians();
+                        (r - r * t.cos(), r * t.sin())
+                    }),
+                    colour.stroke_width(2),
+                ))
+                .map_err(|e| err(e.to_string()))?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+            let point = (kpa * c.normal_stress_pa, kpa * c.shear_force_n / c.area_m2);
+            chart
+                .draw_series(std::iter::once(Circle::new(point, 5, colour.filled())))
+                .map_err(|e| err(e.to_string()))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(e.to_string()))?;
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    Ok(svg)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -162,6 +249,17 @@ mod tests {
             assert!((f - min_shear_force(area, sigma, q)).abs() < 1e-9 * f);
             assert!((max_ucs(area, sigma, f) - q).abs() < 1e-9 * q);
         }
+    }
+
+    #[test]
+    fn the_mohr_plot_draws_a_circle_and_a_point_per_pair() {
+        let a = ShearUcsCheck::new(3e-3, 1e5, 197.4, 259.1e3);
+        let b = ShearUcsCheck::new(3e-3, 1e5, 149.4, 94.25e3);
+        let svg = mohr_svg(&[("6 %, 1.55 MPa".into(), &a), ("6 %, 0.34 MPa".into(), &b)]).unwrap();
+        assert!(svg.starts_with("<svg"));
+        assert!(svg.contains("6 %, 1.55 MPa") && svg.contains("6 %, 0.34 MPa"));
+        assert_eq!(svg.matches("<circle").count(), 2, "one point per pair");
+        assert!(svg.matches("<polyline").count() >= 2, "one circle per pair");
     }
 
     #[test]

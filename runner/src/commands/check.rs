@@ -9,7 +9,7 @@
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use crate::lab::model::Model;
 use crate::lab::shear::default_shear_area;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -30,6 +30,10 @@ pub struct CheckArgs {
     /// Print JSON instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Write the Mohr diagram of the pairs (each UCS's failure circle and the shear box's
+    /// point) to DIR/mohr.svg.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
 }
 
 /// A direct-shear row and a UCS row at the same moisture and firmness, checked.
@@ -172,6 +176,28 @@ pub fn check(args: &CheckArgs, out: &mut dyn Write) -> Result<()> {
         *per_test.entry(r.test.as_str()).or_default() += 1;
     }
     let incompatible = pairs.iter().filter(|p| !p.check.compatible).count();
+    let plotted = match (&args.plot, pairs.is_empty()) {
+        (Some(dir), false) => {
+            let labelled: Vec<(String, &ShearUcsCheck)> = pairs
+                .iter()
+                .map(|p| {
+                    let c = |k: &str| p.conditions.get(k).map_or("-".into(), |v| v.to_string());
+                    (
+                        format!("{} %, {} MPa", c("moisture_pct"), c("firmness_mpa")),
+                        &p.check,
+                    )
+                })
+                .collect();
+            let svg = tilth_tools::consistency::mohr_svg(&labelled).map_err(anyhow::Error::msg)?;
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("--plot {}: cannot create", dir.display()))?;
+            let path = dir.join("mohr.svg");
+            std::fs::write(&path, svg)
+                .with_context(|| format!("{}: cannot write", path.display()))?;
+            Some(path)
+        }
+        _ => None,
+    };
     if args.json {
         let json = serde_json::json!({
             "data": args.data.display().to_string(),
@@ -179,6 +205,7 @@ pub fn check(args: &CheckArgs, out: &mut dyn Write) -> Result<()> {
             "tests": per_test,
             "shear_ucs": pairs,
             "shear_ucs_incompatible": incompatible,
+            "plot": plotted.as_ref().map(|p| p.display().to_string()),
         });
         writeln!(out, "{}", serde_json::to_string_pretty(&json)?)?;
         return Ok(());
@@ -204,6 +231,9 @@ pub fn check(args: &CheckArgs, out: &mut dyn Write) -> Result<()> {
         )?;
     } else {
         write!(out, "{words}")?;
+    }
+    if let Some(p) = plotted {
+        writeln!(out, "\nwritten: {}", p.display())?;
     }
     Ok(())
 }

@@ -137,3 +137,24 @@ fn a_bad_measurement_file_is_refused_by_check_too() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_mohr_diagram_is_written_where_asked() {
+    let dir = std::env::temp_dir().join(format!("tilth-check-plot-{}", std::process::id()));
+    let out = tilth_in_root(&[
+        "check",
+        "data/li2022/measurements.csv",
+        "--plot",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.join("mohr.svg")).unwrap();
+    // One point per (shear, UCS) pair of the file, each labelled by its conditions.
+    assert_eq!(svg.matches("<circle").count(), 8);
+    assert!(svg.contains("12 %, 1.55 MPa"), "labels missing");
+    std::fs::remove_dir_all(&dir).ok();
+}
