@@ -30,6 +30,7 @@
 //! Reference: the Mohr circle and failure envelope, e.g. Craig's Soil Mechanics (8th ed.),
 //! ch. 4 (unconfined compression as the triaxial test with sigma_3 = 0).
 
+use crate::rsm::plot::PALETTE;
 use plotters::prelude::*;
 use serde::Serialize;
 
@@ -117,18 +118,6 @@ fn band_needed(area: f64, normal_stress: f64, force: f64, ucs: f64) -> f64 {
     }
     hi
 }
-
-/// Colours of the pairs in [`mohr_svg`], in turn.
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-];
 
 /// A Mohr diagram (SVG) of labelled pairs: each UCS's failure circle (through 0 and q,
 /// upper half) and, in the same colour, the shear test's point (sigma_n, F / A). A point
