@@ -73,8 +73,8 @@ pub struct ShearUcsCheck {
     pub max_ucs_pa: f64,
     /// Both measurements can come from one material.
     pub compatible: bool,
-    /// The largest relative error band `b` (the same for both, as a fraction) within which no
-    /// pair of values can come from one material: the smallest `b` with
+    /// The smallest relative error band `b` (the same for both, as a fraction) within which
+    /// some pair of values can come from one material: the smallest `b` with
     /// F (1 + b) >= A sqrt(sigma_n (q (1 - b) - sigma_n)). Zero when compatible.
     pub band_needed: f64,
 }
@@ -98,16 +98,26 @@ impl ShearUcsCheck {
     /// strength within `ucs_band` of the measured one can come from one material: the
     /// highest force and the lowest strength in the bands are the most compatible pair.
     pub fn compatible_within(&self, shear_band: f64, ucs_band: f64) -> bool {
-        let f = self.shear_force_n * (1.0 + shear_band);
-        let q = self.ucs_pa * (1.0 - ucs_band);
-        f >= min_shear_force(self.area_m2, self.normal_stress_pa, q)
+        fits_within(
+            self.area_m2,
+            self.normal_stress_pa,
+            self.shear_force_n,
+            self.ucs_pa,
+            (shear_band, ucs_band),
+        )
     }
+}
+
+/// Bound (2) for the most compatible pair within the bands (fractions): the highest force
+/// and the lowest strength.
+fn fits_within(area: f64, normal_stress: f64, force: f64, ucs: f64, bands: (f64, f64)) -> bool {
+    force * (1.0 + bands.0) >= min_shear_force(area, normal_stress, ucs * (1.0 - bands.1))
 }
 
 /// The smallest equal band b in [0, 1] that makes the pair compatible (bisection on a
 /// monotone condition: widening the band raises the force and lowers the strength).
 fn band_needed(area: f64, normal_stress: f64, force: f64, ucs: f64) -> f64 {
-    let ok = |b: f64| force * (1.0 + b) >= min_shear_force(area, normal_stress, ucs * (1.0 - b));
+    let ok = |b: f64| fits_within(area, normal_stress, force, ucs, (b, b));
     if ok(0.0) {
         return 0.0;
     }
