@@ -132,7 +132,9 @@ fn calibrate_a_bond_stiffness_against_the_ucs() {
         "--test",
         "ucs",
         "--param",
-        "soil-soil.normal_stiffness_per_area=5e7:1e9",
+        // The top of the range sets the test's cost: the bonded step falls as 1/sqrt(S), and
+        // at 1e9 Pa/m the five surface runs and the check took 11 minutes of CI on 2 cores.
+        "soil-soil.normal_stiffness_per_area=5e7:2e8",
         "--seeds",
         "1",
         "--refine",
