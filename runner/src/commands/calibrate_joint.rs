@@ -29,7 +29,7 @@ use super::measurements::TESTS;
 use crate::lab::model::evaluate;
 use crate::sweep::execute;
 use crate::sweep::plan::{Plan, PlannedRun};
-use anyhow::{Result, bail};
+use anyhow::{Result, anyhow, bail};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -100,8 +100,10 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     let real = |p: &Param, z: f64| 0.5 * (p.low + p.high) + z * 0.5 * (p.high - p.low);
     let grid = surface_grid(k);
 
-    // 1. Surfaces, one plan per test.
-    let mut fits: Vec<(Measurement, Anova, Vec<(Vec<f64>, f64)>, usize)> = vec![];
+    // 1. Surfaces, one plan per test, every plan built (and each of its runs checked)
+    // before the first run: a parameter one of the tests cannot take (a bond key in the
+    // funnel test) is refused in seconds, not after the other tests' surfaces ran.
+    let mut plans: Vec<(&str, Vec<&Measurement>, Plan)> = vec![];
     for test in &tests {
         let mine: Vec<&Measurement> = rows.iter().filter(|m| m.test == *test).collect();
         if mine.is_empty() {
@@ -137,7 +139,12 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             Path::new("."),
             run_factors(test, &params),
             runs,
-        )?;
+        )
+        .map_err(|e| not_taken(e, test, &params))?;
+        plans.push((test, mine, plan));
+    }
+    let mut fits: Vec<(Measurement, Anova, Vec<(Vec<f64>, f64)>, usize)> = vec![];
+    for (test, mine, plan) in plans {
         let values = run_and_read(
             &plan,
             &args.out.join(format!("surface-{test}")),
@@ -396,6 +403,22 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     std::fs::write(args.out.join("calibration.md"), &md)?;
     write!(out, "{md}")?;
     Ok(())
+}
+
+/// A plan of `test` refused: says which free parameter it cannot take when that is the cause
+/// (bond keys exist only in the tests with bonds).
+fn not_taken(e: anyhow::Error, test: &str, params: &[Param]) -> anyhow::Error {
+    let text = format!("{e:#}");
+    match params
+        .iter()
+        .find(|p| text.contains(&format!("unknown key '{}'", p.key)))
+    {
+        Some(p) => anyhow!(
+            "--param {}.{}: the {test} test does not take it ({text}); calibrate it jointly with the tests that do (a bond parameter: direct_shear, ucs)",
+            p.pair, p.key
+        ),
+        None => e,
+    }
 }
 
 fn fmt(x: &[f64]) -> String {

@@ -328,3 +328,39 @@ fn joint_calibration_shares_one_value_across_conditions() {
         Some((theta * 1e6).round() / 1e6)
     );
 }
+
+/// `--joint` over tests of which one cannot take a free parameter (a bond strength: the
+/// funnel test has no bonds) is refused before any run, whatever the order of `--test`:
+/// the shear box's surface, listed first, is not run first and thrown away.
+#[test]
+fn a_joint_parameter_one_test_cannot_take_is_refused_before_any_run() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-joint-refused");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = tilth(&[
+        "calibrate",
+        "--joint",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        "data/li2022/measurements.csv",
+        "--test",
+        "direct_shear,repose",
+        "--param",
+        "soil-soil.critical_normal_stress=6e3:20e3",
+        "--where",
+        "moisture_pct=3",
+        "--seeds",
+        "1",
+        "--coarse",
+        "--quiet",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--param soil-soil.critical_normal_stress: the repose test does not take it"),
+        "{err}"
+    );
+    assert!(!dir.join("surface-direct_shear").exists(), "{err}");
+}
