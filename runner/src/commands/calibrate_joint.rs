@@ -415,7 +415,8 @@ fn not_taken(e: anyhow::Error, test: &str, params: &[Param]) -> anyhow::Error {
     {
         Some(p) => anyhow!(
             "--param {}.{}: the {test} test does not take it ({text}); calibrate it jointly with the tests that do (a bond parameter: direct_shear, ucs)",
-            p.pair, p.key
+            p.pair,
+            p.key
         ),
         None => e,
     }
