@@ -50,7 +50,7 @@ pub struct CompareArgs {
     pub cores: Option<usize>,
     #[arg(long)]
     pub quiet: bool,
-    /// Keep the runs in this directory, keyed by the model file's content, the test, the
+    /// Keep the runs in this directory, keyed by the model's values (not its comments), the test, the
     /// conditions, the seeds and this build of tilth, and reuse any run already there,
     /// whichever command made it (one command at a time per cache).
     #[arg(long)]
@@ -284,9 +284,17 @@ fn build_id() -> Result<&'static str> {
 
 /// The model file's copy in the cache, named by its content, so that the runs' fingerprint
 /// (which holds the model's path) is the same for every copy of the same model.
+///
+/// The copy is the model's TOML written out again without its comments and layout: a model
+/// that differs only in those (the one `tilth fit` writes, with its header, against the
+/// setting it ran last) is the same model and reuses the same runs.
 fn cached_model(model: &Path, cache: &Path) -> Result<PathBuf> {
-    let text = std::fs::read_to_string(model)
+    let source = std::fs::read_to_string(model)
         .with_context(|| format!("{}: cannot read", model.display()))?;
+    let table: toml::Table =
+        toml::from_str(&source).with_context(|| format!("{}: not TOML", model.display()))?;
+    let text = toml::to_string(&table)
+        .with_context(|| format!("{}: cannot write out again", model.display()))?;
     let dir = std::path::absolute(cache.join("models"))?;
     std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
     let path = dir.join(format!("{}.toml", fnv1a(&[&text])));

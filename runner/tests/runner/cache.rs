@@ -93,6 +93,21 @@ fn a_cache_is_shared_by_commands_and_keyed_by_the_models_content() {
     let b = std::fs::read_to_string(dir.join("compare-copy/compare.csv")).unwrap();
     assert_eq!(a, b);
 
+    // The same values under other comments (as `tilth fit` writes its fitted model, with a
+    // header): the same model, nothing run again.
+    let relaid = format!("# fitted, say\n{model}").replacen(
+        "restitution = 0.45",
+        "restitution = 0.45 # the same number",
+        1,
+    );
+    assert_ne!(relaid, model);
+    std::fs::write(&copy, &relaid).unwrap();
+    let mut relaid_run = vec!["compare".to_string()];
+    relaid_run.extend(common(&copy, "compare-relaid"));
+    run(relaid_run);
+    assert_eq!(run_dirs(&cache), dirs, "comments made another model");
+    assert_eq!(mtimes(&dirs[0]), before, "the runs were redone");
+
     // Another model (one number changed): runs of its own, the first ones untouched.
     let changed = model.replace("restitution = 0.45", "restitution = 0.5");
     assert_ne!(changed, model);
