@@ -20,6 +20,13 @@
 //! each range; a step that raises chi^2 is taken back, lambda raised and the next step at most half as long (Marquardt 1963).
 //! Standard errors from (J'J)^-1, scaled by chi^2 / dof when that is above 1.
 //!
+//! The fit stops at the first setting whose residuals are at the noise, chi^2 <= dof
+//! (Morozov's discrepancy principle, the stopping rule of Hanke's regularizing
+//! Levenberg-Marquardt scheme, Inverse Problems 13 (1997) 79-95): a step from there would
+//! follow the runs' scatter and costs 1 + P settings of DEM runs; `--to-minimum` keeps
+//! stepping. It also stops when every step is under 1 % of its range, or after
+//! `--iterations`.
+//!
 //! Writes `DIR/fit.json` (estimate, standard errors, correlations, the history),
 //! `DIR/fit.md`, and `DIR/model.toml`: the model with the fitted parameters, ready for
 //! `tilth compare`. Runs go to `DIR/runs/iter-K/<variant>/` and resume.
@@ -55,6 +62,10 @@ pub struct FitArgs {
     /// Levenberg-Marquardt iterations, at most (each runs 1 + parameters settings).
     #[arg(long, default_value_t = 4)]
     pub iterations: usize,
+    /// Keep stepping after the residuals reach the noise (chi^2 <= degrees of freedom),
+    /// where the fit stops by default.
+    #[arg(long)]
+    pub to_minimum: bool,
     #[arg(long)]
     pub out: PathBuf,
     #[arg(long)]
@@ -256,6 +267,8 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     // The last step, as a fraction of each range (its largest component).
     let mut last_step = 0.25f64;
     let mut history: Vec<Step> = vec![];
+    let dof = rows.len().saturating_sub(n).max(1);
+    let mut stopped = Stop::Iterations;
     for it in 0..=args.iterations {
         if !args.quiet {
             eprintln!(
@@ -335,6 +348,15 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 }
             }
             best = Some((theta.clone(), chi2, centre, se, jac));
+            if chi2 <= dof as f64 && !args.to_minimum {
+                if !args.quiet {
+                    eprintln!(
+                        "fit: at the noise (chi^2 {chi2:.2} <= {dof} degrees of freedom); --to-minimum steps on"
+                    );
+                }
+                stopped = Stop::AtNoise;
+                break;
+            }
         } else {
             lambda *= 4.0;
             // Back to the best setting, with a step half as long as the one that failed
@@ -374,6 +396,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             last_step = last_step.max((next[k] - b_theta[k]).abs() / span);
         }
         if small {
+            stopped = Stop::Converged;
             if !args.quiet {
                 eprintln!("fit: converged (every step under 1 % of its range)");
             }
@@ -383,7 +406,6 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     }
 
     let (b_theta, b_chi2, b_centre, _, jac) = best.expect("iteration 0 ran");
-    let dof = rows.len().saturating_sub(n).max(1);
     let scale = (b_chi2 / dof as f64).max(1.0);
     let cov = (jac.transpose() * &jac).try_inverse().map(|c| c * scale);
     let sd: Vec<Option<f64>> = (0..n)
@@ -426,6 +448,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         "rmse_start": first.rmse,
         "rmse": rmse(&rows, &b_centre),
         "history": history,
+        "stopped": stopped,
         "fitted_model": model_out.display().to_string(),
     });
     std::fs::write(args.out.join("fit.json"), serde_json::to_vec_pretty(&json)?)?;
@@ -450,8 +473,10 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     md += &format!(
-        "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}).\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
-        b_chi2, first.chi2
+        "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}). {}\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
+        b_chi2,
+        first.chi2,
+        stopped.say(args.iterations)
     );
     let end = rmse(&rows, &b_centre);
     for (k, v) in &end {
@@ -469,6 +494,28 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         args.out.display()
     )?;
     Ok(())
+}
+
+/// Why the fit ended.
+#[derive(Debug, Clone, Copy, Serialize)]
+#[serde(rename_all = "snake_case")]
+enum Stop {
+    /// chi^2 <= dof: the residuals are at the noise.
+    AtNoise,
+    /// Every step under 1 % of its range.
+    Converged,
+    /// `--iterations` used up.
+    Iterations,
+}
+
+impl Stop {
+    fn say(self, iterations: usize) -> String {
+        match self {
+            Stop::AtNoise => "Stopped at the noise (chi^2 <= degrees of freedom): a further step would follow the runs' scatter; `--to-minimum` steps on.".into(),
+            Stop::Converged => "Converged: every step under 1 % of its range.".into(),
+            Stop::Iterations => format!("Stopped after --iterations {iterations}."),
+        }
+    }
 }
 
 fn describe(p: &FreeParam) -> String {

@@ -121,3 +121,52 @@ fn the_fitted_model_is_what_was_simulated() {
         );
     }
 }
+
+/// Readings whose uncertainty dwarfs any model's miss: the start is at the noise (chi^2 at
+/// most the degrees of freedom), so the fit runs the start and its Jacobian and stops there.
+#[test]
+fn a_fit_stops_where_the_residuals_reach_the_noise() {
+    let dir = scratch("fit-at-noise");
+    let data = dir.join("data.csv");
+    std::fs::write(
+        &data,
+        DATA.replace(",0.8,4,", ",30,4,")
+            .replace(",15,4,", ",600,4,"),
+    )
+    .unwrap();
+    let out = dir.join("fit");
+    let o = tilth(&[
+        "fit",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        data.to_str().unwrap(),
+        "--param",
+        "soil-soil.rolling_friction=0.05:0.45",
+        "--replicates",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+        "--coarse",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fit: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("fit.json")).unwrap()).unwrap();
+    let chi2 = fit["chi2"].as_f64().unwrap();
+    let dof = fit["dof"].as_f64().unwrap();
+    assert!(
+        chi2 <= dof,
+        "the data were meant to be at the noise: chi^2 {chi2}, dof {dof}"
+    );
+    assert_eq!(fit["stopped"], "at_noise");
+    assert_eq!(fit["history"].as_array().unwrap().len(), 1);
+    assert!(out.join("runs/iter-0/param-0").exists(), "no Jacobian");
+    assert!(
+        !out.join("runs/iter-1").exists(),
+        "stepped on from the noise"
+    );
+    assert!(fit["standard_error"][0].as_f64().is_some());
+    let md = std::fs::read_to_string(out.join("fit.md")).unwrap();
+    assert!(md.contains("Stopped at the noise"), "{md}");
+}
