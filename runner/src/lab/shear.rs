@@ -6,7 +6,8 @@
 //! pressure, and the upper ring (with the platen riding on it) moves horizontally at
 //! `shear_speed` until `shear_displacement` (5 mm). The shear force is the force of the
 //! particles on the lower box (ring, bottom and flange) along the shear direction, averaged
-//! over each 2 ms block. Loading is sped up only while the
+//! over each 2 ms block; the channel `shear_force_drive` reads the same force where the
+//! moving half (upper ring, flange, platen) pushes the soil, as a check. Loading is sped up only while the
 //! inertial number I = (v / h) d sqrt(rho / sigma_n) stays below `max_inertial_number`.
 
 use super::experiment::{Built, Common, scene::*, soil_density};
@@ -209,6 +210,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
             peak: (0.0, 0.0),
             max_i: 0.0,
             box_force: specimen::MeanForce::new(&[LOWER, BOTTOM, LOWER_FLANGE]),
+            drive_force: specimen::MeanForce::new(&[UPPER, UPPER_FLANGE, PLATEN]),
             platen_force: specimen::MeanForce::new(&[PLATEN]),
         }),
     })
@@ -241,6 +243,8 @@ struct ShearProtocol {
     /// Mean forces on the lower box and on the platen since the last control call: the
     /// block just run (see [`specimen::MeanForce`]).
     box_force: specimen::MeanForce,
+    /// The same for the moving half (upper ring, its flange and the platen riding on it).
+    drive_force: specimen::MeanForce,
     platen_force: specimen::MeanForce,
 }
 
@@ -252,6 +256,14 @@ impl ShearProtocol {
     /// Shear force on the lower box over the last block, N.
     fn shear_force(&self, sim: &Simulation) -> f64 {
         self.box_force.mean(sim).x
+    }
+
+    /// The force the moving half (upper ring, flange, platen) exerts on the soil along the
+    /// shear direction over the last block, N: the same force as [`Self::shear_force`] read at
+    /// the other end of the specimen. The two differ by the rate of change of the soil's
+    /// momentum, so a gap between them means the test is not quasi-static.
+    fn drive_force(&self, sim: &Simulation) -> f64 {
+        -self.drive_force.mean(sim).x
     }
 
     /// Normal force on the platen over the last block, N.
@@ -266,6 +278,7 @@ impl Protocol for ShearProtocol {
         // Decisions use the forces averaged over the block just run; then a new block starts.
         let (fx, fz) = (self.shear_force(sim), self.normal_force(sim));
         self.box_force.mark(sim);
+        self.drive_force.mark(sim);
         self.platen_force.mark(sim);
         match self.phase {
             Phase::Prepare => {
@@ -358,6 +371,7 @@ impl Protocol for ShearProtocol {
             let sigma = self.normal_force(sim).max(0.0) / self.area;
             out.push(("shear_displacement".into(), self.displacement(sim)));
             out.push(("shear_force".into(), self.shear_force(sim)));
+            out.push(("shear_force_drive".into(), self.drive_force(sim)));
             out.push((
                 "inertial_number".into(),
                 specimen::inertial_number(self.speed / self.p.height, self.d, self.rho, sigma),
@@ -370,6 +384,7 @@ impl Protocol for ShearProtocol {
         specimen::units(&[
             ("shear_displacement", "m"),
             ("shear_force", "N"),
+            ("shear_force_drive", "N"),
             ("normal_force", "N"),
             ("inertial_number", "-"),
             ("bonds_intact", "count"),
