@@ -209,6 +209,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
             x0: 0.0,
             peak: (0.0, 0.0),
             max_i: 0.0,
+            max_gap: 0.0,
             box_force: specimen::MeanForce::new(&[LOWER, BOTTOM, LOWER_FLANGE]),
             drive_force: specimen::MeanForce::new(&[UPPER, UPPER_FLANGE, PLATEN]),
             platen_force: specimen::MeanForce::new(&[PLATEN]),
@@ -240,6 +241,8 @@ struct ShearProtocol {
     /// (displacement, force) at the peak so far.
     peak: (f64, f64),
     max_i: f64,
+    /// The largest |box - drive| block mean past the first 10 % of the displacement, N.
+    max_gap: f64,
     /// Mean forces on the lower box and on the platen since the last control call: the
     /// block just run (see [`specimen::MeanForce`]).
     box_force: specimen::MeanForce,
@@ -277,6 +280,7 @@ impl Protocol for ShearProtocol {
         let block = ((0.002 / sim.dt).ceil() as u64).max(1);
         // Decisions use the forces averaged over the block just run; then a new block starts.
         let (fx, fz) = (self.shear_force(sim), self.normal_force(sim));
+        let drive = self.drive_force(sim);
         self.box_force.mark(sim);
         self.drive_force.mark(sim);
         self.platen_force.mark(sim);
@@ -342,6 +346,7 @@ impl Protocol for ShearProtocol {
                     specimen::inertial_number(self.speed / self.p.height, self.d, self.rho, sigma);
                 if x > 0.1 * self.p.shear_displacement {
                     self.max_i = self.max_i.max(i);
+                    self.max_gap = self.max_gap.max((fx - drive).abs());
                 }
                 if x >= self.p.shear_displacement {
                     for k in [UPPER, UPPER_FLANGE, PLATEN] {
@@ -432,6 +437,7 @@ impl Protocol for ShearProtocol {
             "normal_pressure_pa": self.p.normal_pressure,
             "shear_speed_m_per_s": self.speed,
             "max_inertial_number": self.max_i,
+            "max_force_gap_n": self.max_gap,
             "particles": sim.particles.len(),
             "bonds_formed": self.bonds,
             "time_step_bonded_s": self.prep.bonded_dt,
