@@ -72,9 +72,9 @@ pub struct SynthArgs {
     pub cores: Option<usize>,
     #[arg(long)]
     pub quiet: bool,
-    /// Keep the runs in this directory, keyed by the model's values (not its comments), the test, the
-    /// conditions and the seeds, and reuse any run already there, whichever command made it
-    /// (one command at a time per cache).
+    /// Keep the runs in this directory, keyed by the model's values (not its comments), the
+    /// test, the conditions and the seeds, and reuse any run already there, whichever
+    /// command made it (one command at a time per cache).
     #[arg(long)]
     pub cache: Option<PathBuf>,
 }

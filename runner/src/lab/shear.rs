@@ -7,8 +7,9 @@
 //! `shear_speed` until `shear_displacement` (5 mm). The shear force is the force of the
 //! particles on the lower box (ring, bottom and flange) along the shear direction, averaged
 //! over each 2 ms block; the channel `shear_force_drive` reads the same force where the
-//! moving half (upper ring, flange, platen) pushes the soil, as a check. Loading is sped up only while the
-//! inertial number I = (v / h) d sqrt(rho / sigma_n) stays below `max_inertial_number`.
+//! moving half (upper ring, flange, platen) pushes the soil, as a check. Loading is sped up
+//! only while the inertial number I = (v / h) d sqrt(rho / sigma_n) stays below
+//! `max_inertial_number`.
 
 use super::experiment::{Built, Common, scene::*, soil_density};
 use super::protocol::{Control, Protocol};
