@@ -285,6 +285,17 @@ pub fn soil_modulus(model: &Model) -> Result<f64> {
     }
 }
 
+/// Poisson ratio of the model's soil (0.2 when not given, as in the Rayleigh time).
+pub fn soil_poisson_ratio(model: &Model) -> f64 {
+    model
+        .file
+        .materials
+        .get("soil")
+        .and_then(|m| m.get("poisson_ratio"))
+        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+        .unwrap_or(0.2)
+}
+
 /// Density of the model's soil, kg/m^3.
 pub fn soil_density(model: &Model) -> Result<f64> {
     model

@@ -147,7 +147,11 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         );
     }
     let r = 0.5 * p.box_diameter;
-    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
+    let loads = specimen::Loads {
+        compaction: p.compaction_force / area,
+        test: p.normal_pressure,
+    };
+    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
     let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
     // Loose particles need about twice the specimen's height; the platen starts above that.
     let z_mid = 0.5 * p.height;

@@ -1,11 +1,14 @@
 //! What the direct shear and UCS tests share: filling a cylindrical mould, settling,
 //! compacting with a servo platen, forming bonds, and the inertial number.
 
-use super::experiment::{Common, rayleigh_time, scene::*};
+use super::experiment::{
+    Common, rayleigh_time, scene::*, soil_density, soil_modulus, soil_poisson_ratio,
+};
 use super::sizes::SizeMix;
 use anyhow::{Result, bail};
 use tilth_kernel::DVec3;
 use tilth_kernel::sim::Simulation;
+use tilth_kernel::timestep::{LOADED_COORDINATION, loaded_packing_step};
 use tilth_kernel::wall::Motion;
 use toml::Value;
 
@@ -90,30 +93,44 @@ pub fn press(force: f64, max_speed: f64) -> Motion {
 /// until it blew up while at 0.07 it ran clean (BENCHMARKS.md, virtual lab).
 pub const BOND_DT_FRACTION: f64 = 0.08;
 
-/// Largest fraction of the Rayleigh time a specimen is prepared at. A compacted specimen is
-/// a dense packing in which every grain presses on five to seven others, stiffer than the
-/// one contact the Rayleigh time estimates: at 35 % (the lab's default `dt_fraction`, right
-/// for the funnel's loose flow) the coarse UCS specimen at 6 % (seed 1) gained energy while
-/// compacted under 12 N and packed to 36 mm instead of 49 mm; at 20 % it packed to 49.01 mm,
-/// as at 14 % and 1.4 % of the Rayleigh time (49.07 and 48.84 mm). (Before, a specimen was
-/// prepared at the bonds' step, which the model's soil-steel bond entry kept at about 14 %.)
-pub const COMPACTION_DT_FRACTION: f64 = 0.2;
-
 /// The time steps of a bonded specimen, s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Steps {
     /// Filling, settling and compacting, before any bond: `dt_fraction` of the Rayleigh
-    /// time, at most [`COMPACTION_DT_FRACTION`].
+    /// time, at most the step a packing stands under the compaction pressure
+    /// ([`loaded_step`]).
     pub prepare: f64,
-    /// From the moment bonds form: the smaller of that and [`BOND_DT_FRACTION`] of the
-    /// stiffest bond's time scale. Stiff bonds need a step ten or more times shorter than
-    /// the contacts; preparing at the bonds' step spent most of a run on unbonded grains.
+    /// From the moment bonds form: the smaller of that, the step a packing stands under the
+    /// test's pressure, and [`BOND_DT_FRACTION`] of the stiffest bond's time scale. Stiff
+    /// bonds need a step ten or more times shorter than the contacts; preparing at the
+    /// bonds' step spent most of a run on unbonded grains.
     pub bonded: f64,
+}
+
+/// Pressures a specimen is stepped for, Pa.
+#[derive(Debug, Clone, Copy)]
+pub struct Loads {
+    /// The compaction platen's force over the specimen's area.
+    pub compaction: f64,
+    /// The test's stress scale (the shear box's normal pressure, the UCS reference stress).
+    pub test: f64,
 }
 
 /// The time steps and particle count for a specimen of `volume` (m^3) at `packing`. A
 /// `[simulation] dt` given in the file is used throughout.
-pub fn particles_for(c: &Common, mix: &SizeMix, volume: f64, packing: f64) -> Result<(Steps, i64)> {
+///
+/// A step chosen from the Rayleigh time alone lost the grains' friction under load: the
+/// 2 mm shear specimen at 20 % of it (bond-limited at 14 % for 4 mm grains, fine there) read
+/// 49 N at a solid fraction of 0.735 with bonds that broke at once, frictionless grains 43 N,
+/// and the same specimen at 10 % 111 N at 0.57 (docs/li2022-statistics.md, "The shear box
+/// checked"); the kernel's test tests/tests/loaded_packing.rs shows it on 600 grains.
+pub fn particles_for(
+    c: &Common,
+    mix: &SizeMix,
+    volume: f64,
+    packing: f64,
+    loads: Loads,
+) -> Result<(Steps, i64)> {
     let d = mix.min_diameter();
     let steps = match c.sim.dt {
         Some(dt) => Steps {
@@ -121,15 +138,36 @@ pub fn particles_for(c: &Common, mix: &SizeMix, volume: f64, packing: f64) -> Re
             bonded: dt,
         },
         None => {
-            let prepare =
-                c.sim.dt_fraction.min(COMPACTION_DT_FRACTION) * rayleigh_time(c.model, d)?;
+            let prepare = (c.sim.dt_fraction * rayleigh_time(c.model, d)?).min(loaded_step(
+                c,
+                d,
+                loads.compaction,
+                packing,
+            )?);
             Steps {
                 prepare,
-                bonded: prepare.min(bond_time_scale(c, d)? * BOND_DT_FRACTION),
+                bonded: prepare
+                    .min(loaded_step(c, d, loads.test, packing)?)
+                    .min(bond_time_scale(c, d)? * BOND_DT_FRACTION),
             }
         }
     };
     Ok((steps, mix.count(packing * volume)))
+}
+
+/// The longest step a packing of the model's soil (grains of diameter `d`, solid fraction
+/// `packing`) stands under `pressure` Pa: [`loaded_packing_step`] with
+/// [`LOADED_COORDINATION`] contacts a grain.
+pub fn loaded_step(c: &Common, d: f64, pressure: f64, packing: f64) -> Result<f64> {
+    Ok(loaded_packing_step(
+        0.5 * d,
+        soil_density(c.model)?,
+        soil_modulus(c.model)?,
+        soil_poisson_ratio(c.model),
+        pressure,
+        LOADED_COORDINATION,
+        packing,
+    ))
 }
 
 /// Refuses any of `values` that is not a finite number above 0 (`section.key` in messages).

@@ -137,7 +137,11 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     }
     let r = 0.5 * p.mould_diameter;
     let area = std::f64::consts::PI * r * r;
-    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing)?;
+    let loads = specimen::Loads {
+        compaction: p.compaction_force / area,
+        test: p.reference_stress,
+    };
+    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
     let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
     let z_fill = 2.4 * p.height / (p.packing / 0.55);
     let z_top = z_fill + 2.0 * d;
