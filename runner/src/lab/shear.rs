@@ -37,7 +37,8 @@ pub struct ShearParams {
     /// Solid fraction of the compacted specimen (sets the particle count).
     #[serde(default = "default_packing")]
     pub packing: f64,
-    /// Normal pressure during shear, Pa (table 12: 0.1 MPa).
+    /// Normal pressure during shear, Pa (table 12: 0.1 MPa); it also sets the loaded time
+    /// step (`specimen::loaded_step`).
     #[serde(default = "default_pressure")]
     pub normal_pressure: f64,
     /// Compaction force before bonding, N (the study: 12 N).
