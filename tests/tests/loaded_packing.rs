@@ -1,5 +1,6 @@
 //! A frictional packing under load keeps its friction at the step
-//! `timestep::loaded_packing_step` gives, and loses it at twice that step.
+//! `timestep::loaded_packing_step` gives, and loses it at twice that step, or, when strongly
+//! damped, at the step that ignores the damping.
 //!
 //! Found in the virtual lab (docs/li2022-statistics.md, "The shear box checked"): the 2 mm
 //! shear specimen, stepped at 20 % of the Rayleigh time under 100 kPa, compacted to a solid
@@ -22,10 +23,10 @@ const RING: f64 = 0.010;
 const COUNT: usize = 600;
 
 /// Solid fraction of the pressed packing and the platen's force relative to its target.
-fn pressed(dt: f64, friction: f64) -> (f64, f64) {
+fn pressed(dt: f64, friction: f64, restitution: f64) -> (f64, f64) {
     let m = model(
         &spec("hertz", Some("restitution"), Some("mindlin"), None),
-        &[("restitution", 0.45), ("friction", friction)],
+        &[("restitution", restitution), ("friction", friction)],
     );
     let factory = Factory::new(FactorySpec {
         region: Region::Cylinder {
@@ -97,15 +98,26 @@ fn pressed(dt: f64, friction: f64) -> (f64, f64) {
 
 #[test]
 fn a_pressed_packing_keeps_its_friction_at_the_loaded_step_and_loses_it_at_twice_that() {
-    let step = loaded_packing_step(R, RHO, E, NU, PRESSURE, LOADED_COORDINATION, 0.6);
-    let (reference, f_ref) = pressed(0.5 * step, 0.8);
-    let (at_step, f_step) = pressed(step, 0.8);
-    let (frictionless, _) = pressed(step, 0.0);
-    let (at_twice, _) = pressed(2.0 * step, 0.8);
+    let step = |e| loaded_packing_step(R, RHO, E, NU, e, PRESSURE, LOADED_COORDINATION, 0.6);
+    let (reference, f_ref) = pressed(0.5 * step(0.45), 0.8, 0.45);
+    let (at_step, f_step) = pressed(step(0.45), 0.8, 0.45);
+    let (frictionless, _) = pressed(step(0.45), 0.0, 0.45);
+    let (at_twice, _) = pressed(2.0 * step(0.45), 0.8, 0.45);
+    // Restitution 0.1 damps the rolling-sliding mode beyond zeta = 0.75: the step shrinks to
+    // the damped limit (0.82 of the undamped rule's), which holds where the undamped rule
+    // does not.
+    let (damped_reference, _) = pressed(0.5 * step(0.1), 0.8, 0.1);
+    let (damped_at_step, _) = pressed(step(0.1), 0.8, 0.1);
+    let (damped_undamped_rule, _) = pressed(step(1.0), 0.8, 0.1);
     eprintln!(
-        "step {step:.3e} s: solid fraction {reference:.4} at half of it, {at_step:.4} at it, \
-         {at_twice:.4} at twice it; frictionless {frictionless:.4} (platen force {f_ref:.3} and \
-         {f_step:.3} of its target)"
+        "restitution 0.45, step {:.3e} s: solid fraction {reference:.4} at half of it, \
+         {at_step:.4} at it, {at_twice:.4} at twice it, frictionless {frictionless:.4} \
+         (platen force {f_ref:.3} and {f_step:.3} of its target); restitution 0.1, step \
+         {:.3e} s: {damped_reference:.4} at half of it, {damped_at_step:.4} at it, \
+         {damped_undamped_rule:.4} at the undamped rule's {:.3e} s",
+        step(0.45),
+        step(0.1),
+        step(1.0)
     );
     // The platen holds its load at both steps, so the fractions compare like with like.
     assert!((f_ref - 1.0).abs() < 0.05 && (f_step - 1.0).abs() < 0.05);
@@ -117,10 +129,18 @@ fn a_pressed_packing_keeps_its_friction_at_the_loaded_step_and_loses_it_at_twice
         (at_step - reference).abs() < 0.1 * friction_effect,
         "at the loaded step the packing reaches {at_step:.4}, at half of it {reference:.4}"
     );
-    // while at twice the step it has lost more than half of it: the bound is not
-    // conservative by a factor of two.
+    assert!(
+        (damped_at_step - damped_reference).abs() < 0.1 * friction_effect,
+        "restitution 0.1: {damped_at_step:.4} at the step, {damped_reference:.4} at half of it"
+    );
+    // while at twice the step, or without the damping's share, it has lost more than half
+    // of it: the bound is not conservative by a factor of two, and the damping term matters.
     assert!(
         at_twice - reference > 0.5 * friction_effect,
         "at twice the step the packing reaches {at_twice:.4}, at half of it {reference:.4}"
+    );
+    assert!(
+        damped_undamped_rule - damped_reference > 0.5 * friction_effect,
+        "restitution 0.1 at omega dt = 1: {damped_undamped_rule:.4}"
     );
 }

@@ -155,15 +155,28 @@ pub fn particles_for(
     Ok((steps, mix.count(packing * volume)))
 }
 
+/// The smallest restitution coefficient of the model's material pairs at these conditions
+/// (1 where a pair has none: undamped), for [`loaded_step`].
+fn soil_restitution(c: &Common) -> Result<f64> {
+    let (_, _, pairs) = c.model.scene_parts(c.conditions, true)?;
+    Ok(pairs
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|pair| pair.get("restitution").and_then(Value::as_float))
+        .fold(1.0, f64::min))
+}
+
 /// The longest step a packing of the model's soil (grains of diameter `d`, solid fraction
 /// `packing`) stands under `pressure` Pa: [`loaded_packing_step`] with
-/// [`LOADED_COORDINATION`] contacts a grain.
+/// [`LOADED_COORDINATION`] contacts a grain and the model's lowest restitution.
 pub fn loaded_step(c: &Common, d: f64, pressure: f64, packing: f64) -> Result<f64> {
     Ok(loaded_packing_step(
         0.5 * d,
         soil_density(c.model)?,
         soil_modulus(c.model)?,
         soil_poisson_ratio(c.model),
+        soil_restitution(c)?,
         pressure,
         LOADED_COORDINATION,
         packing,
