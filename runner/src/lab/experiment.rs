@@ -268,16 +268,22 @@ pub fn particle_diameter(c: &Common, given: Option<f64>) -> f64 {
     given.unwrap_or(if c.coarse { 0.004 } else { 0.002 })
 }
 
+/// The number `key` of the model's material `soil`, if given (integers read as floats).
+fn soil_number(model: &Model, key: &str) -> Option<f64> {
+    model
+        .file
+        .materials
+        .get("soil")
+        .and_then(|m| m.get(key))
+        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+}
+
 /// Young's modulus of the model's soil, Pa.
 pub fn soil_modulus(model: &Model) -> Result<f64> {
-    let soil = model.file.materials.get("soil").and_then(Value::as_table);
-    let num = |k: &str| {
-        soil.and_then(|s| s.get(k))
-            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-    };
+    let num = |k: &str| soil_number(model, k);
     match (num("youngs_modulus"), num("shear_modulus")) {
         (Some(e), _) => Ok(e),
-        (None, Some(g)) => Ok(2.0 * g * (1.0 + num("poisson_ratio").unwrap_or(0.2))),
+        (None, Some(g)) => Ok(2.0 * g * (1.0 + soil_poisson_ratio(model))),
         _ => bail!(
             "{}: materials.soil needs youngs_modulus or shear_modulus",
             model.path.display()
@@ -287,29 +293,17 @@ pub fn soil_modulus(model: &Model) -> Result<f64> {
 
 /// Poisson ratio of the model's soil (0.2 when not given, as in the Rayleigh time).
 pub fn soil_poisson_ratio(model: &Model) -> f64 {
-    model
-        .file
-        .materials
-        .get("soil")
-        .and_then(|m| m.get("poisson_ratio"))
-        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-        .unwrap_or(0.2)
+    soil_number(model, "poisson_ratio").unwrap_or(0.2)
 }
 
 /// Density of the model's soil, kg/m^3.
 pub fn soil_density(model: &Model) -> Result<f64> {
-    model
-        .file
-        .materials
-        .get("soil")
-        .and_then(|m| m.get("density"))
-        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-        .ok_or_else(|| {
-            anyhow!(
-                "{}: materials.soil.density is missing",
-                model.path.display()
-            )
-        })
+    soil_number(model, "density").ok_or_else(|| {
+        anyhow!(
+            "{}: materials.soil.density is missing",
+            model.path.display()
+        )
+    })
 }
 
 /// Helpers to write scene TOML in code.

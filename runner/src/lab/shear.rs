@@ -38,7 +38,7 @@ pub struct ShearParams {
     #[serde(default = "default_packing")]
     pub packing: f64,
     /// Normal pressure during shear, Pa (table 12: 0.1 MPa); it also sets the loaded time
-    /// step (`specimen::loaded_step`).
+    /// step (`specimen::loaded_steps`).
     #[serde(default = "default_pressure")]
     pub normal_pressure: f64,
     /// Compaction force before bonding, N (the study: 12 N).

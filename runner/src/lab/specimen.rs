@@ -98,7 +98,7 @@ pub const BOND_DT_FRACTION: f64 = 0.08;
 pub struct Steps {
     /// Filling, settling and compacting, before any bond: `dt_fraction` of the Rayleigh
     /// time, at most the step a packing stands under the compaction pressure
-    /// ([`loaded_step`]).
+    /// ([`loaded_steps`]).
     pub prepare: f64,
     /// From the moment bonds form: the smaller of that, the step a packing stands under the
     /// test's pressure, and [`BOND_DT_FRACTION`] of the stiffest bond's time scale. Stiff
@@ -138,16 +138,12 @@ pub fn particles_for(
             bonded: dt,
         },
         None => {
-            let prepare = (c.sim.dt_fraction * rayleigh_time(c.model, d)?).min(loaded_step(
-                c,
-                d,
-                loads.compaction,
-                packing,
-            )?);
+            let (compaction, test) = loaded_steps(c, d, packing, loads)?;
+            let prepare = (c.sim.dt_fraction * rayleigh_time(c.model, d)?).min(compaction);
             Steps {
                 prepare,
                 bonded: prepare
-                    .min(loaded_step(c, d, loads.test, packing)?)
+                    .min(test)
                     .min(bond_time_scale(c, d)? * BOND_DT_FRACTION),
             }
         }
@@ -156,7 +152,7 @@ pub fn particles_for(
 }
 
 /// The smallest restitution coefficient of the model's material pairs at these conditions
-/// (1 where a pair has none: undamped), for [`loaded_step`].
+/// (1 where a pair has none: undamped), for [`loaded_steps`].
 fn soil_restitution(c: &Common) -> Result<f64> {
     let (_, _, pairs) = c.model.scene_parts(c.conditions, true)?;
     Ok(pairs
@@ -167,20 +163,26 @@ fn soil_restitution(c: &Common) -> Result<f64> {
         .fold(1.0, f64::min))
 }
 
-/// The longest step a packing of the model's soil (grains of diameter `d`, solid fraction
-/// `packing`) stands under `pressure` Pa: [`loaded_packing_step`] with
-/// [`LOADED_COORDINATION`] contacts a grain and the model's lowest restitution.
-pub fn loaded_step(c: &Common, d: f64, pressure: f64, packing: f64) -> Result<f64> {
-    Ok(loaded_packing_step(
-        0.5 * d,
-        soil_density(c.model)?,
-        soil_modulus(c.model)?,
-        soil_poisson_ratio(c.model),
-        soil_restitution(c)?,
-        pressure,
-        LOADED_COORDINATION,
-        packing,
-    ))
+/// The longest steps a packing of the model's soil (grains of diameter `d`, solid fraction
+/// `packing`) stands under the compaction and the test pressure of `loads`:
+/// [`loaded_packing_step`] with [`LOADED_COORDINATION`] contacts a grain and the model's
+/// lowest restitution.
+pub fn loaded_steps(c: &Common, d: f64, packing: f64, loads: Loads) -> Result<(f64, f64)> {
+    let (rho, e) = (soil_density(c.model)?, soil_modulus(c.model)?);
+    let (nu, restitution) = (soil_poisson_ratio(c.model), soil_restitution(c)?);
+    let step = |pressure| {
+        loaded_packing_step(
+            0.5 * d,
+            rho,
+            e,
+            nu,
+            restitution,
+            pressure,
+            LOADED_COORDINATION,
+            packing,
+        )
+    };
+    Ok((step(loads.compaction), step(loads.test)))
 }
 
 /// Refuses any of `values` that is not a finite number above 0 (`section.key` in messages).

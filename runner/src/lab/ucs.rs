@@ -48,7 +48,7 @@ pub struct UcsParams {
     pub speed: Option<f64>,
     #[serde(default = "default_inertial")]
     pub max_inertial_number: f64,
-    /// Stress scale for the speed and the loaded time step (`specimen::loaded_step`), Pa
+    /// Stress scale for the speed and the loaded time step (`specimen::loaded_steps`), Pa
     /// (the study's strengths: 11-320 kPa).
     #[serde(default = "default_reference")]
     pub reference_stress: f64,
