@@ -127,10 +127,19 @@ fn direct_shear_coarse_shears_5_mm_under_the_set_pressure() {
         gap < 0.02 * peak,
         "the two halves read forces {gap} N apart, against a peak of {peak} N"
     );
+    // The platen holds the set load while the specimen contracts under it: on average
+    // (a proportional servo alone trailed it by 5 % here, by 10-15 % at 2 mm) and in every
+    // block past the first 10 % of the displacement.
     let sigma = r["reduced"]["mean_normal_stress_pa"].as_f64().unwrap();
     assert!(
-        (sigma - 1e5).abs() < 0.1 * 1e5,
+        (sigma - 1e5).abs() < 0.02 * 1e5,
         "normal stress {sigma} Pa, set 1e5"
+    );
+    let worst = e["max_normal_deviation"].as_f64().unwrap();
+    assert!(
+        worst < 0.05,
+        "a block's normal force strayed {:.1} % from the set load",
+        100.0 * worst
     );
 }
 
