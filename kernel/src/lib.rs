@@ -16,6 +16,8 @@
 //! - [`wall`]: planes, discs, cylinders, cone frusta and STL meshes, static, moving or servo-driven.
 //! - [`factory`]: dynamic particle generation at a rate.
 //! - [`sim::Simulation`]: velocity-Verlet stepping, failure detection, determinism.
+//! - [`timestep`], [`step_check`]: the step a scene may take, before a run and from its
+//!   contacts during one.
 
 pub mod contact;
 pub mod error;
@@ -25,6 +27,7 @@ pub mod neighbor;
 pub mod param;
 pub mod particles;
 pub mod sim;
+pub mod step_check;
 pub mod timestep;
 pub mod wall;
 

@@ -21,6 +21,7 @@ use crate::error::{KernelError, Result};
 use crate::factory::Factory;
 use crate::neighbor::{CHUNK, PairList};
 use crate::particles::Particles;
+use crate::step_check::{PackingFrequency, loaded_step_warning, packing_frequency};
 use crate::timestep::{BOND_WARN_FRACTION, WARN_FRACTION, rayleigh_time};
 use crate::wall::{Hit, Wall};
 use glam::DVec3;
@@ -90,6 +91,12 @@ pub struct Simulation {
     pub rebuilds: u64,
     /// Rayleigh time of the smallest particle, s.
     pub rayleigh_time: f64,
+    /// The packing's stiffest contact mode at the last reorder (every [`SORT_EVERY`]
+    /// steps; see [`crate::step_check`]), `None` before the first or while nothing touches.
+    pub packing_frequency: Option<PackingFrequency>,
+    /// Whether the step has been warned about as too long for the loaded contacts (once per
+    /// step size: [`Simulation::set_dt`] clears it).
+    loaded_step_warned: bool,
     skin: f64,
     /// skin + the laws' reach: the list distance beyond touching.
     extra: f64,
@@ -283,6 +290,8 @@ impl Simulation {
             warnings,
             rebuilds: 0,
             rayleigh_time: t_r,
+            packing_frequency: None,
+            loaded_step_warned: false,
             time_origin: 0.0,
             step_origin: 0,
             skin,
@@ -394,9 +403,27 @@ impl Simulation {
         if sort || created > 0 || max_disp2.sqrt() + wall_disp > 0.5 * self.skin {
             self.rebuild();
         }
+        if sort {
+            self.check_loaded_step();
+        }
         match self.compute_forces(true) {
             None => Ok(()),
             Some((i, kind)) => Err(self.failure(i, kind)),
+        }
+    }
+
+    /// Bounds the packing's stiffest contact mode from the pair list and warns, once per
+    /// step size, when the step is beyond its stable limit. Reads state only: a run with
+    /// and without the check gives the same bits.
+    fn check_loaded_step(&mut self) {
+        let f = packing_frequency(&self.particles, &self.model, &self.pairs, self.dt);
+        self.packing_frequency = f;
+        if self.loaded_step_warned {
+            return;
+        }
+        if let Some(w) = f.and_then(|f| loaded_step_warning(self.dt, &f)) {
+            self.warnings.push(w);
+            self.loaded_step_warned = true;
         }
     }
 
@@ -857,7 +884,8 @@ impl Simulation {
     /// once they form (a specimen prepared at the contacts' step, then bonded). Velocity
     /// Verlet is self-starting, so a step of one length may follow one of another; contact
     /// histories integrate rates with each step's own `dt`. Refuses a step that is not a
-    /// positive number; warns, as at start, above [`WARN_FRACTION`] of the Rayleigh time.
+    /// positive number; warns, as at start, above [`WARN_FRACTION`] of the Rayleigh time, and
+    /// checks the new step against the loaded contacts anew.
     pub fn set_dt(&mut self, dt: f64) -> Result<()> {
         check_dt(dt)?;
         if dt == self.dt {
@@ -866,6 +894,7 @@ impl Simulation {
         self.time_origin = self.time;
         self.step_origin = self.step;
         self.dt = dt;
+        self.loaded_step_warned = false;
         if let Some(w) = rayleigh_step_warning(dt, self.rayleigh_time) {
             if !self.warnings.contains(&w) {
                 self.warnings.push(w);

@@ -6,7 +6,8 @@
 //! shear specimen, stepped at 20 % of the Rayleigh time under 100 kPa, compacted to a solid
 //! fraction of 0.735 and read what frictionless grains read. Here 600 grains of 2 mm are
 //! poured into a 20 mm cylinder and pressed by a servo platen to 100 kPa; friction 0.8 holds
-//! a packing near 0.60, friction 0 lets it reach 0.66 and more.
+//! a packing near 0.60, friction 0 lets it reach 0.66 and more. The kernel's check of the
+//! step against the contacts as they are (`step_check`) warns in the runs that lose it.
 
 mod common;
 use common::*;
@@ -22,8 +23,21 @@ const PRESSURE: f64 = 1e5;
 const RING: f64 = 0.010;
 const COUNT: usize = 600;
 
-/// Solid fraction of the pressed packing and the platen's force relative to its target.
-fn pressed(dt: f64, friction: f64, restitution: f64) -> (f64, f64) {
+/// A packing pressed to 100 kPa.
+struct Pressed {
+    /// Solid fraction.
+    phi: f64,
+    /// The platen's force relative to its target.
+    force: f64,
+    /// The kernel's bound on the contacts' stiffest mode at the end (`step_check`), times
+    /// the step, and its stable limit for the contacts' damping.
+    omega_dt: f64,
+    stable: f64,
+    /// Whether the kernel warned that the step is too long for the loaded contacts.
+    warned: bool,
+}
+
+fn pressed(dt: f64, friction: f64, restitution: f64) -> Pressed {
     let m = model(
         &spec("hertz", Some("restitution"), Some("mindlin"), None),
         &[("restitution", restitution), ("friction", friction)],
@@ -93,31 +107,76 @@ fn pressed(dt: f64, friction: f64, restitution: f64) -> (f64, f64) {
         .iter()
         .map(|r| 4.0 / 3.0 * PI * r.powi(3))
         .sum();
-    (solids / (area * height), s.walls[2].force.z / target)
+    let f = s.packing_frequency.unwrap();
+    Pressed {
+        phi: solids / (area * height),
+        force: s.walls[2].force.z / target,
+        omega_dt: f.omega * dt,
+        stable: f.stable_omega_dt(),
+        warned: s
+            .warnings
+            .iter()
+            .any(|w| w.contains("the packing's contacts")),
+    }
 }
 
 #[test]
 fn a_pressed_packing_keeps_its_friction_at_the_loaded_step_and_loses_it_at_twice_that() {
     let step = |e| loaded_packing_step(R, RHO, E, NU, e, PRESSURE, LOADED_COORDINATION, 0.6);
-    let (reference, f_ref) = pressed(0.5 * step(0.45), 0.8, 0.45);
-    let (at_step, f_step) = pressed(step(0.45), 0.8, 0.45);
-    let (frictionless, _) = pressed(step(0.45), 0.0, 0.45);
-    let (at_twice, _) = pressed(2.0 * step(0.45), 0.8, 0.45);
+    let reference = pressed(0.5 * step(0.45), 0.8, 0.45);
+    let at_step = pressed(step(0.45), 0.8, 0.45);
+    let frictionless = pressed(step(0.45), 0.0, 0.45);
+    let at_twice = pressed(2.0 * step(0.45), 0.8, 0.45);
     // Restitution 0.1 damps the rolling-sliding mode beyond zeta = 0.75: the step shrinks to
     // the damped limit (0.82 of the undamped rule's), which holds where the undamped rule
     // does not.
-    let (damped_reference, _) = pressed(0.5 * step(0.1), 0.8, 0.1);
-    let (damped_at_step, _) = pressed(step(0.1), 0.8, 0.1);
-    let (damped_undamped_rule, _) = pressed(step(1.0), 0.8, 0.1);
+    let damped_reference = pressed(0.5 * step(0.1), 0.8, 0.1);
+    let damped_at_step = pressed(step(0.1), 0.8, 0.1);
+    let damped_undamped_rule = pressed(step(1.0), 0.8, 0.1);
+    let show = |p: &Pressed| {
+        format!(
+            "{:.4} (omega dt {:.2} of {:.2}{})",
+            p.phi,
+            p.omega_dt,
+            p.stable,
+            if p.warned { ", warned" } else { "" }
+        )
+    };
     eprintln!(
-        "restitution 0.45, step {:.3e} s: solid fraction {reference:.4} at half of it, \
-         {at_step:.4} at it, {at_twice:.4} at twice it, frictionless {frictionless:.4} \
-         (platen force {f_ref:.3} and {f_step:.3} of its target); restitution 0.1, step \
-         {:.3e} s: {damped_reference:.4} at half of it, {damped_at_step:.4} at it, \
-         {damped_undamped_rule:.4} at the undamped rule's {:.3e} s",
+        "restitution 0.45, step {:.3e} s: solid fraction {} at half of it, {} at it, {} at \
+         twice it, frictionless {} (platen force {:.3} and {:.3} of its target); restitution \
+         0.1, step {:.3e} s: {} at half of it, {} at it, {} at the undamped rule's {:.3e} s",
         step(0.45),
+        show(&reference),
+        show(&at_step),
+        show(&at_twice),
+        show(&frictionless),
+        reference.force,
+        at_step.force,
         step(0.1),
+        show(&damped_reference),
+        show(&damped_at_step),
+        show(&damped_undamped_rule),
         step(1.0)
+    );
+    // The kernel's own check, from the contacts as they are, warns where the friction is
+    // lost and not where it holds.
+    for (p, name) in [(&at_step, "the step"), (&damped_at_step, "the damped step")] {
+        assert!(!p.warned, "warned at {name}: {}", show(p));
+    }
+    for (p, name) in [
+        (&at_twice, "twice the step"),
+        (&damped_undamped_rule, "the undamped rule at 0.1"),
+    ] {
+        assert!(p.warned, "no warning at {name}: {}", show(p));
+    }
+    let (f_ref, f_step) = (reference.force, at_step.force);
+    let (reference, at_step, frictionless, at_twice) =
+        (reference.phi, at_step.phi, frictionless.phi, at_twice.phi);
+    let (damped_reference, damped_at_step, damped_undamped_rule) = (
+        damped_reference.phi,
+        damped_at_step.phi,
+        damped_undamped_rule.phi,
     );
     // The platen holds its load at both steps, so the fractions compare like with like.
     assert!((f_ref - 1.0).abs() < 0.05 && (f_step - 1.0).abs() < 0.05);

@@ -90,6 +90,17 @@ pub enum BondStatus {
     Broken(f64),
 }
 
+/// A contact's stiffnesses at its current overlap (see [`ContactModel::stiffness`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactStiffness {
+    /// dF_n / d(delta_n), N/m.
+    pub normal: f64,
+    /// The tangential spring, N/m.
+    pub tangential: f64,
+    /// The tangential dashpot, N s/m.
+    pub tangential_damping: f64,
+}
+
 pub struct ContactModel {
     materials: Vec<Material>,
     /// `pairs[a * n + b]`, symmetric; `None` where no coefficients were given.
@@ -504,6 +515,38 @@ impl ContactModel {
                 out
             }
         }
+    }
+
+    /// The stiffnesses of one touching contact between materials a and b, for step checks:
+    /// normal and tangential (N/m) and the tangential dashpot (N s/m). `None` when the pair
+    /// has no laws or does not overlap. Reads the history without changing it.
+    pub fn stiffness(
+        &self,
+        a: usize,
+        b: usize,
+        c: &Contact,
+        history: &[f64],
+    ) -> Option<ContactStiffness> {
+        let laws = self.pairs[a * self.materials.len() + b].as_ref()?;
+        if c.overlap <= 0.0 {
+            return None;
+        }
+        // A hysteretic normal law writes its history; this is a look, not a step.
+        let mut scratch = history[self.layout.normal.clone()].to_vec();
+        let normal = laws.normal.force(c, &mut scratch);
+        let tangential = match &laws.tangential {
+            Some(t) => t.stiffness(c, &normal),
+            None => 0.0,
+        };
+        let damping = match &laws.damping {
+            Some(d) if tangential > 0.0 => d.coefficient(tangential, c.m_eff),
+            _ => 0.0,
+        };
+        Some(ContactStiffness {
+            normal: normal.stiffness,
+            tangential,
+            tangential_damping: damping,
+        })
     }
 
     // Always inlined: with a second caller (`evaluate_pair`) and plain `#[inline]`, the
