@@ -48,7 +48,11 @@ fn one_contact_s_frequency_and_damping_are_hertz_mindlin_s() {
     let (k_n, k_t) = (2.0 * e_eff() * a, 8.0 * g_star * a);
     let mass = RHO * 4.0 / 3.0 * PI * R.powi(3);
     let omega = ((7.0 * k_t).max(2.0 * k_n) / mass).sqrt();
-    assert!((f.omega / omega - 1.0).abs() < 1e-9, "{} vs {omega}", f.omega);
+    assert!(
+        (f.omega / omega - 1.0).abs() < 1e-9,
+        "{} vs {omega}",
+        f.omega
+    );
     let zeta = (5.0f64 / 6.0).sqrt() * beta(restitution).abs() * 3.5f64.sqrt();
     assert!((f.zeta / zeta - 1.0).abs() < 1e-9, "{} vs {zeta}", f.zeta);
     let limit = 2.0 * ((1.0 + zeta * zeta).sqrt() - zeta);

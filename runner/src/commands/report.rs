@@ -15,6 +15,9 @@ pub struct RunReport {
     pub threads: usize,
     /// Time step, s.
     pub dt: f64,
+    /// The longest step the touching contacts stood at the last reorder (kernel
+    /// `step_check`), s; `null` when nothing touched.
+    pub contact_step_limit: Option<f64>,
     pub steps: u64,
     /// s.
     pub simulated_time: f64,
@@ -141,6 +144,7 @@ impl RunReport {
             laws: info.laws.clone(),
             threads,
             dt: sim.dt,
+            contact_step_limit: sim.packing_frequency.map(|f| f.stable_step()),
             steps: sim.step,
             simulated_time: sim.time,
             setup_seconds,
@@ -193,6 +197,13 @@ impl RunReport {
             "steps               {} x {:.3e} s = {:.6} s simulated",
             self.steps, self.dt, self.simulated_time
         )?;
+        if let Some(limit) = self.contact_step_limit {
+            writeln!(
+                out,
+                "contact step limit  {limit:.3e} s (the touching contacts under their last load; the step is {:.0} % of it)",
+                100.0 * self.dt / limit
+            )?;
+        }
         writeln!(
             out,
             "wall time           {:.3} s stepping ({} thread{}), {:.3} s setup",
