@@ -1056,16 +1056,7 @@ fn pair_force(
     if dist == 0.0 {
         return None;
     }
-    let c = Contact::between_spheres(
-        d,
-        dist,
-        (p.radius[i], p.radius[j]),
-        (p.mass[i], p.mass[j]),
-        (p.inertia[i], p.inertia[j]),
-        (p.velocity[i], p.velocity[j]),
-        (p.angular_velocity[i], p.angular_velocity[j]),
-        dt,
-    );
+    let c = Contact::between_particles(p, i, j, d, dist, dt);
     model.evaluate_pair(p.material[i] as usize, p.material[j] as usize, &c, time, h)
 }
 

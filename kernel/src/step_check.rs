@@ -23,6 +23,7 @@ use crate::contact::geometry::Contact;
 use crate::contact::model::ContactModel;
 use crate::neighbor::PairList;
 use crate::particles::Particles;
+use crate::timestep::damped_verlet_limit;
 
 /// The packing's stiffest contact mode, from its touching pairs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,7 +41,7 @@ pub struct PackingFrequency {
 impl PackingFrequency {
     /// The explicit scheme's limit omega dt for this damping, 2 (sqrt(1 + zeta^2) - zeta).
     pub fn stable_omega_dt(&self) -> f64 {
-        2.0 * ((1.0 + self.zeta * self.zeta).sqrt() - self.zeta)
+        damped_verlet_limit(self.zeta)
     }
 
     /// The longest stable step for this packing, s.
@@ -49,8 +50,8 @@ impl PackingFrequency {
     }
 }
 
-/// Bounds the packing's stiffest mode from the pairs in `pairs` that overlap now. `None`
-/// when no pair touches.
+/// Bounds the packing's stiffest mode from the pairs in `pairs` that overlap now
+/// ([`ContactModel::stiffness`] skips the others). `None` when no pair touches.
 pub fn packing_frequency(
     p: &Particles,
     model: &ContactModel,
@@ -64,19 +65,10 @@ pub fn packing_frequency(
         let (i, j) = (pairs.i[k] as usize, pairs.j[k] as usize);
         let d = p.position[j] - p.position[i];
         let dist = d.length();
-        if dist == 0.0 || dist >= p.radius[i] + p.radius[j] {
+        if dist == 0.0 {
             continue;
         }
-        let c = Contact::between_spheres(
-            d,
-            dist,
-            (p.radius[i], p.radius[j]),
-            (p.mass[i], p.mass[j]),
-            (p.inertia[i], p.inertia[j]),
-            (p.velocity[i], p.velocity[j]),
-            (p.angular_velocity[i], p.angular_velocity[j]),
-            dt,
-        );
+        let c = Contact::between_particles(p, i, j, d, dist, dt);
         let h = &pairs.history[k * stride..(k + 1) * stride];
         let (a, b) = (p.material[i] as usize, p.material[j] as usize);
         let Some(s) = model.stiffness(a, b, &c, h) else {

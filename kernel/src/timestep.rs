@@ -89,8 +89,13 @@ pub fn loaded_packing_step(
     let zeta = (5.0f64 / 6.0).sqrt()
         * crate::contact::laws::restitution::beta(restitution).abs()
         * 3.5f64.sqrt();
-    let damped_limit = 2.0 * ((1.0 + zeta * zeta).sqrt() - zeta);
-    damped_limit.min(1.0) / (coordination * one).sqrt()
+    damped_verlet_limit(zeta).min(1.0) / (coordination * one).sqrt()
+}
+
+/// The largest omega dt at which velocity Verlet stays stable for an oscillator of damping
+/// ratio `zeta`: 2 (sqrt(1 + zeta^2) - zeta), 2 undamped.
+pub fn damped_verlet_limit(zeta: f64) -> f64 {
+    2.0 * ((1.0 + zeta * zeta).sqrt() - zeta)
 }
 
 #[cfg(test)]

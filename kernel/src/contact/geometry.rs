@@ -1,5 +1,6 @@
 //! Contact geometry and kinematics, computed once per contact and shared by all slots.
 
+use crate::particles::Particles;
 use glam::DVec3;
 
 /// One contact between particle i and particle j (or a wall, which has infinite radius,
@@ -36,6 +37,29 @@ pub struct Contact {
 }
 
 impl Contact {
+    /// The contact of particles i and j of `p`, as [`Contact::between_spheres`] from their
+    /// state. `d = x_j - x_i`, `dist = |d| > 0`.
+    #[inline]
+    pub fn between_particles(
+        p: &Particles,
+        i: usize,
+        j: usize,
+        d: DVec3,
+        dist: f64,
+        dt: f64,
+    ) -> Contact {
+        Contact::between_spheres(
+            d,
+            dist,
+            (p.radius[i], p.radius[j]),
+            (p.mass[i], p.mass[j]),
+            (p.inertia[i], p.inertia[j]),
+            (p.velocity[i], p.velocity[j]),
+            (p.angular_velocity[i], p.angular_velocity[j]),
+            dt,
+        )
+    }
+
     /// Builds the contact of two spheres. `d = x_j - x_i`, `dist = |d| > 0`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
