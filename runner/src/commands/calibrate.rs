@@ -28,7 +28,7 @@ use super::compare::{
     Measurement, condition_factors, experiment_text, factor, mean_sd, read_measurements,
     run_generated,
 };
-use crate::lab::model::{Model, evaluate};
+use crate::lab::model::{At, Model, evaluate_at};
 use crate::sweep::execute;
 use crate::sweep::job::{Status, read_summary, run_dir};
 use crate::sweep::plan::{Factor, Plan, PlannedRun};
@@ -60,6 +60,12 @@ pub struct CalibrateArgs {
     /// per condition.
     #[arg(long)]
     pub joint: bool,
+    /// The calibrated values hold for this test's specimens only: written as a case that
+    /// names the test (`when = { test = "ucs", ... }`), the other tests keeping the model's
+    /// values. For specimens prepared differently per test, as the study's bond tables
+    /// (2 from the shear box, 3 from compression).
+    #[arg(long)]
+    pub per_test: bool,
     /// A free parameter and its range: `PAIR.KEY=LOW:HIGH`, e.g.
     /// `soil-soil.rolling_friction=0.05:0.45` (repeatable).
     #[arg(long = "param", required = true)]
@@ -190,6 +196,11 @@ pub struct Iteration {
 }
 
 pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
+    if args.joint && args.per_test {
+        bail!(
+            "--per-test gives one test its own values; --joint shares one value across tests: choose one"
+        );
+    }
     if args.joint {
         check_counts(args)?;
         return super::calibrate_joint::joint(args, out);
@@ -275,7 +286,10 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         let fit = surface(&params, m, &pts, mine.len())?;
         let start: Vec<f64> = params
             .iter()
-            .map(|p| evaluate(param_form(&model, p).expect("checked above"), &conds))
+            .map(|p| {
+                let form = param_form(&model, p).expect("checked above");
+                evaluate_at(form, At::test(&conds, &args.test))
+            })
             .collect::<Result<_>>()?;
         let solution = rsm::solve(&fit, &describe(&conds), m.value, &[])?;
         let zs = fit.coding.code(&start);
@@ -496,7 +510,8 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         });
     }
     let model_out = args.out.join("model.toml");
-    calibrate_report::write_model(&model_path, &model_out, &params, &results_out)?;
+    let test = args.per_test.then_some(args.test.as_str());
+    calibrate_report::write_model(&model_path, &model_out, &params, &results_out, test)?;
     let json = serde_json::json!({
         "test": args.test,
         "model": args.model,

@@ -37,6 +37,7 @@ pub fn write_model(
     to: &Path,
     params: &[Param],
     results: &[ConditionResult],
+    test: Option<&str>,
 ) -> Result<()> {
     let text = std::fs::read_to_string(from)
         .with_context(|| format!("{}: cannot read", from.display()))?;
@@ -85,7 +86,7 @@ pub fn write_model(
             ),
         };
         let fixed = shared_conditions(results.iter().map(|r| &r.conditions));
-        let value = only_where(&fixed, value, current(&doc, p));
+        let value = only_where(&fixed, test, value, current(&doc, p));
         set(&mut doc, from, p, value, "tilth calibrate")?;
     }
     std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
@@ -111,12 +112,16 @@ pub fn shared_conditions<'a>(
 /// it was a `cases` table (the first match wins, so the new case overrides the old one at
 /// its conditions), else one last case `{ when = {}, value = previous }` (an empty `when`
 /// matches every condition). With no fixed condition, or nothing previous, `value` alone.
+///
+/// With `test` (`calibrate --per-test`), the new case names the test too
+/// (`when = { test = "ucs", ... }`), so the value holds for that test's specimens only.
 pub fn only_where(
     fixed: &BTreeMap<String, f64>,
+    test: Option<&str>,
     value: toml_edit::Value,
     previous: Option<toml_edit::Value>,
 ) -> toml_edit::Value {
-    let Some(previous) = previous.filter(|_| !fixed.is_empty()) else {
+    let Some(previous) = previous.filter(|_| !fixed.is_empty() || test.is_some()) else {
         return value;
     };
     let case = |when: toml_edit::InlineTable, value: toml_edit::Value| {
@@ -126,6 +131,9 @@ pub fn only_where(
         toml_edit::Value::InlineTable(c)
     };
     let mut when = toml_edit::InlineTable::new();
+    if let Some(t) = test {
+        when.insert("test", t.into());
+    }
     for (k, v) in fixed {
         when.insert(k, (*v).into());
     }
@@ -138,8 +146,11 @@ pub fn only_where(
         else {
             return false;
         };
-        w.len() == fixed.len()
+        w.len() == fixed.len() + usize::from(test.is_some())
             && w.iter().all(|(k, v)| {
+                if k == "test" {
+                    return v.as_str() == test;
+                }
                 let v = v.as_float().or(v.as_integer().map(|i| i as f64));
                 v.zip(fixed.get(k))
                     .is_some_and(|(a, b)| (a - b).abs() < 1e-9)
@@ -213,6 +224,7 @@ pub fn write_constants(
     for (p, v) in params.iter().zip(values) {
         let value = only_where(
             fixed,
+            None,
             toml_edit::Value::from((v * 1e6).round() / 1e6),
             current(&doc, p),
         );
@@ -391,12 +403,17 @@ mod tests {
             "{ interpolate = \"moisture_pct\", x = [3, 12], y = [0.1, 0.4] }"
                 .parse()
                 .unwrap();
-        let v = only_where(&fixed(&[("moisture_pct", 6.0)]), 0.9.into(), Some(previous));
+        let v = only_where(
+            &fixed(&[("moisture_pct", 6.0)]),
+            None,
+            0.9.into(),
+            Some(previous),
+        );
         assert_eq!(at(&v, &[("moisture_pct", 6.0)]), 0.9);
         assert!((at(&v, &[("moisture_pct", 9.0)]) - 0.3).abs() < 1e-12);
         assert!((at(&v, &[("moisture_pct", 3.0)]) - 0.1).abs() < 1e-12);
         // No fixed condition: the new value replaces the old one everywhere.
-        let all = only_where(&BTreeMap::new(), 0.9.into(), Some(1.0.into()));
+        let all = only_where(&BTreeMap::new(), None, 0.9.into(), Some(1.0.into()));
         assert_eq!(at(&all, &[("moisture_pct", 9.0)]), 0.9);
     }
 
@@ -408,6 +425,7 @@ mod tests {
                 .unwrap();
         let v = only_where(
             &fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
+            None,
             5.0.into(),
             Some(previous),
         );
@@ -428,6 +446,7 @@ mod tests {
         // Calibrated there again: the earlier case is replaced, not shadowed.
         let again = only_where(
             &fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
+            None,
             7.0.into(),
             Some(v),
         );
@@ -442,6 +461,47 @@ mod tests {
         assert_eq!(
             at(&again, &[("moisture_pct", 9.0), ("firmness_mpa", 1.55)]),
             2.0
+        );
+    }
+
+    #[test]
+    fn a_value_calibrated_per_test_holds_for_that_test_only() {
+        use crate::lab::model::{At, evaluate_at};
+        let in_test = |form: &toml_edit::Value, conds: &[(&str, f64)], test: &str| {
+            let t: toml::Table = format!("v = {form}").parse().unwrap();
+            let c = conds.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+            evaluate_at(&t["v"], At::test(&c, test)).unwrap()
+        };
+        let here = fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]);
+        let v = only_where(&here, Some("ucs"), 4.0.into(), Some(1.0.into()));
+        let c = [("moisture_pct", 6.0), ("firmness_mpa", 1.55)];
+        assert_eq!(in_test(&v, &c, "ucs"), 4.0);
+        assert_eq!(in_test(&v, &c, "direct_shear"), 1.0);
+        assert_eq!(
+            in_test(&v, &[("moisture_pct", 9.0), ("firmness_mpa", 1.55)], "ucs"),
+            1.0
+        );
+        // The other test calibrated at the same conditions: both cases kept.
+        let w = only_where(&here, Some("direct_shear"), 3.0.into(), Some(v));
+        assert_eq!(in_test(&w, &c, "ucs"), 4.0);
+        assert_eq!(in_test(&w, &c, "direct_shear"), 3.0);
+        assert_eq!(
+            w.as_inline_table().unwrap()["cases"]
+                .as_array()
+                .unwrap()
+                .len(),
+            3
+        );
+        // The same test again: its case is replaced.
+        let again = only_where(&here, Some("ucs"), 5.0.into(), Some(w));
+        assert_eq!(in_test(&again, &c, "ucs"), 5.0);
+        assert_eq!(in_test(&again, &c, "direct_shear"), 3.0);
+        assert_eq!(
+            again.as_inline_table().unwrap()["cases"]
+                .as_array()
+                .unwrap()
+                .len(),
+            3
         );
     }
 }

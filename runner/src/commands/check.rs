@@ -139,7 +139,9 @@ pub fn describe(pairs: &[PairCheck]) -> String {
              parameters; a calibration to both finds a compromise, or needs something that \
              differs between the two tests (end friction on the compression platens, \
              progressive failure in the box, the normal stress or area of the shear test as \
-             recorded).\n",
+             recorded), or specimens prepared differently per test: `tilth calibrate \
+             --per-test` gives each test its own values (`when = {{ test = ... }}` in the \
+             model).\n",
             bad.len(),
             pairs.len()
         );

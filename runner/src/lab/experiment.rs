@@ -17,7 +17,7 @@
 //! `coarse = true` (or `tilth run --coarse`) switches to each test's coarse preset, which
 //! finishes in under a minute for tests and smoke runs.
 
-use super::model::{Conditions, Model};
+use super::model::{At, Conditions, Model};
 use super::protocol::Protocol;
 use super::{repose, shear, ucs};
 use crate::config;
@@ -88,8 +88,17 @@ impl Default for SimulationSettings {
 pub struct Common<'a> {
     pub model: &'a Model,
     pub conditions: &'a Conditions,
+    /// The test (one of [`KINDS`]): model values may differ per test.
+    pub test: &'a str,
     pub sim: &'a SimulationSettings,
     pub coarse: bool,
+}
+
+impl Common<'_> {
+    /// Where the model's values are evaluated: these conditions, in this test.
+    pub fn at(&self) -> At<'_> {
+        At::test(self.conditions, self.test)
+    }
 }
 
 /// A built experiment: the scene (TOML, checked like any scene) and its protocol.
@@ -142,6 +151,7 @@ pub fn build(
     let common = Common {
         model: &model,
         conditions: &file.conditions,
+        test: &file.experiment,
         sim: &file.simulation,
         coarse: file.coarse,
     };
@@ -341,6 +351,50 @@ mod tests {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         let built = build(toml::from_str(text).unwrap(), "test", &root, overrides).unwrap();
         built.bonded_dt.unwrap()
+    }
+
+    /// A model value in a case that names the test reaches that test's scene only.
+    #[test]
+    fn a_value_for_one_test_reaches_that_tests_scene_only() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let model = std::fs::read_to_string(root.join("models/li2022.toml")).unwrap();
+        let per_test = "critical_shear_stress = { cases = [ \
+            { when = { test = \"ucs\", moisture_pct = 6, firmness_mpa = 1.55 }, value = 4.5e5 }, \
+            { when = { test = \"direct_shear\" }, value = 1.5e5 }, { when = {}, value = 6e4 } ] }";
+        let start = model.find("critical_shear_stress = { cases").unwrap();
+        let end = start + model[start..].find("] }\n").unwrap() + 3;
+        let dir = std::env::temp_dir().join(format!("tilth-per-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("model.toml");
+        std::fs::write(
+            &path,
+            format!("{}{per_test}{}", &model[..start], &model[end..]),
+        )
+        .unwrap();
+        let value_in = |test: &str, moisture: f64| -> f64 {
+            let text = format!(
+                "format_version = 1\nexperiment = \"{test}\"\nmodel = \"{}\"\ncoarse = true\n\
+                 [conditions]\nmoisture_pct = {moisture}\nfirmness_mpa = 1.55\n",
+                path.display()
+            );
+            let built = build(toml::from_str(&text).unwrap(), "test", &dir, &[]).unwrap();
+            let pairs = built.scene["pairs"].as_array().unwrap();
+            let soil = pairs
+                .iter()
+                .find(|p| {
+                    p["materials"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .all(|m| m.as_str() == Some("soil"))
+                })
+                .unwrap();
+            soil["critical_shear_stress"].as_float().unwrap()
+        };
+        assert_eq!(value_in("ucs", 6.0), 4.5e5);
+        assert_eq!(value_in("direct_shear", 6.0), 1.5e5);
+        assert_eq!(value_in("ucs", 9.0), 6e4);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// A sweep that stiffens the bonds through the scene gets the time step of the stiffer

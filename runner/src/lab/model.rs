@@ -20,9 +20,13 @@
 //! A value is a number, a linear interpolation in one condition (no extrapolation: a
 //! condition outside the table is refused with the table's range), a polynomial
 //! c0 + c1 x + c2 x^2 + ... in one condition, or `cases`: the first case whose `when`
-//! conditions all equal the given ones. Materials and the contact section pass through to the
-//! scene unchanged.
+//! conditions all equal the given ones. A `when` may also name the test, `test = "ucs"`:
+//! that case holds for that test's specimens only (the study calibrated its bonds per test,
+//! tables 2 and 3, and tables 12 and 13 cannot both come from one material; see
+//! docs/li2022-statistics.md). Materials and the contact section pass through to the scene
+//! unchanged.
 
+use super::experiment::KINDS;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -116,6 +120,33 @@ pub struct Model {
 /// Test conditions: name -> value.
 pub type Conditions = BTreeMap<String, f64>;
 
+/// Where a value is evaluated: the test conditions and, when known, the test, which a
+/// `cases` entry may name (`when = { test = "ucs" }`). A case that names a test does not
+/// match where the test is unknown.
+#[derive(Debug, Clone, Copy)]
+pub struct At<'a> {
+    pub conditions: &'a Conditions,
+    pub test: Option<&'a str>,
+}
+
+impl<'a> At<'a> {
+    /// Conditions only (no test named).
+    pub fn conditions(conditions: &'a Conditions) -> At<'a> {
+        At {
+            conditions,
+            test: None,
+        }
+    }
+
+    /// Conditions in one test.
+    pub fn test(conditions: &'a Conditions, test: &'a str) -> At<'a> {
+        At {
+            conditions,
+            test: Some(test),
+        }
+    }
+}
+
 impl Model {
     pub fn load(path: &Path) -> Result<Model> {
         let text = std::fs::read_to_string(path)
@@ -160,10 +191,10 @@ impl Model {
         Ok(())
     }
 
-    /// The scene fragments (`materials`, `contact`, `pairs`) at `conds`, with the bond law
+    /// The scene fragments (`materials`, `contact`, `pairs`) at `at`, with the bond law
     /// and its parameters when `bonds`.
-    pub fn scene_parts(&self, conds: &Conditions, bonds: bool) -> Result<(Value, Value, Value)> {
-        self.check_conditions(conds)?;
+    pub fn scene_parts(&self, at: At, bonds: bool) -> Result<(Value, Value, Value)> {
+        self.check_conditions(at.conditions)?;
         let path = self.path.display();
         let mut by_pair: BTreeMap<String, toml::Table> = BTreeMap::new();
         let mut add =
@@ -171,7 +202,7 @@ impl Model {
                 for (pair, params) in pairs {
                     let t = by_pair.entry(pair.clone()).or_default();
                     for (key, form) in params {
-                        let v = evaluate(form, conds)
+                        let v = evaluate_at(form, at)
                             .map_err(|e| anyhow!("{path}: {section}.{pair}.{key}: {e}"))?;
                         t.insert(key.clone(), Value::Float(v));
                     }
@@ -240,8 +271,14 @@ fn condition<'a>(t: &toml::Table, key: &str, conds: &'a Conditions) -> Result<(&
         .ok_or_else(|| anyhow!("condition `{name}` is not given"))
 }
 
-/// The value of one parameter form at `conds`.
+/// The value of one parameter form at `conds`, in no test in particular.
 pub fn evaluate(form: &Value, conds: &Conditions) -> Result<f64> {
+    evaluate_at(form, At::conditions(conds))
+}
+
+/// The value of one parameter form at `at`.
+pub fn evaluate_at(form: &Value, at: At) -> Result<f64> {
+    let conds = at.conditions;
     if let Some(x) = number(form) {
         return Ok(x);
     }
@@ -277,17 +314,34 @@ pub fn evaluate(form: &Value, conds: &Conditions) -> Result<f64> {
                 .get("when")
                 .and_then(Value::as_table)
                 .ok_or_else(|| anyhow!("each case needs `when = {{ condition = value }}`"))?;
-            let hit = when.iter().all(|(k, v)| {
-                number(v).is_some_and(|v| conds.get(k).is_some_and(|c| (c - v).abs() < 1e-9))
-            });
+            let mut hit = true;
+            for (k, v) in when {
+                hit &= if k == "test" {
+                    let name = v.as_str().filter(|n| KINDS.contains(n)).ok_or_else(|| {
+                        anyhow!(
+                            "`when = {{ test = {v} }}`: the tests are {}",
+                            KINDS.join(", ")
+                        )
+                    })?;
+                    at.test == Some(name)
+                } else {
+                    let v = number(v).ok_or_else(|| {
+                        anyhow!("`when = {{ {k} = {v} }}`: a condition's value is a number")
+                    })?;
+                    conds.get(k).is_some_and(|c| (c - v).abs() < 1e-9)
+                };
+            }
             if hit {
                 let value = case
                     .get("value")
                     .ok_or_else(|| anyhow!("a case needs `value`"))?;
-                return evaluate(value, conds);
+                return evaluate_at(value, at);
             }
         }
-        let given: Vec<String> = conds.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        let mut given: Vec<String> = conds.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        if let Some(t) = at.test {
+            given.push(format!("test = \"{t}\""));
+        }
         bail!("no case matches {}", given.join(", "));
     }
     bail!("unknown value form: use a number, {{ interpolate }}, {{ polynomial }} or {{ cases }}")
@@ -329,5 +383,34 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("no case matches"), "{e}");
+    }
+
+    #[test]
+    fn a_case_may_name_the_test_and_holds_for_that_test_only() {
+        let v: Value = toml::from_str(
+            "s = { cases = [ { when = { test = \"ucs\", moisture_pct = 6 }, value = 5.0 }, \
+                             { when = { test = \"direct_shear\" }, value = 3.0 }, \
+                             { when = {}, value = 1.0 } ] }\n\
+             typo = { cases = [ { when = { test = \"shear\" }, value = 2.0 } ] }\n\
+             word = { cases = [ { when = { moisture_pct = \"six\" }, value = 2.0 } ] }",
+        )
+        .unwrap();
+        let c = conds(6.0, 1.55);
+        assert_eq!(evaluate_at(&v["s"], At::test(&c, "ucs")).unwrap(), 5.0);
+        assert_eq!(
+            evaluate_at(&v["s"], At::test(&c, "direct_shear")).unwrap(),
+            3.0
+        );
+        assert_eq!(evaluate_at(&v["s"], At::test(&c, "repose")).unwrap(), 1.0);
+        // Another moisture skips the UCS case; no test named skips both test cases.
+        let c9 = conds(9.0, 1.55);
+        assert_eq!(evaluate_at(&v["s"], At::test(&c9, "ucs")).unwrap(), 1.0);
+        assert_eq!(evaluate(&v["s"], &c).unwrap(), 1.0);
+        let e = evaluate_at(&v["typo"], At::test(&c, "ucs"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("repose, direct_shear, ucs"), "{e}");
+        let e = evaluate(&v["word"], &c).unwrap_err().to_string();
+        assert!(e.contains("a condition's value is a number"), "{e}");
     }
 }

@@ -161,7 +161,7 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
         bail!("repose.funnel_inlet_diameter must be larger than funnel_outlet_diameter");
     }
     let rho = soil_density(c.model)?;
-    let mix = SizeMix::of(c.model, c.conditions, d)?;
+    let mix = SizeMix::of(c.model, c.at(), d)?;
     let count = mix.count(mass * 1e-3 / rho);
     if count < 1 {
         bail!("repose.mass_g = {mass} g is less than one particle");
@@ -170,7 +170,7 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
         Some(dt) => dt,
         None => c.sim.dt_fraction * rayleigh_time(c.model, mix.min_diameter())?,
     };
-    let (materials, contact, pairs) = c.model.scene_parts(c.conditions, false)?;
+    let (materials, contact, pairs) = c.model.scene_parts(c.at(), false)?;
     let tray_r = 0.5 * p.tray_diameter;
     let z_tray = p.tray_height;
     let z_out = z_tray + p.drop_height;

@@ -108,7 +108,7 @@ const UPPER_FLANGE: usize = 5;
 
 pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
-    let mix = super::sizes::SizeMix::of(c.model, c.conditions, d)?;
+    let mix = super::sizes::SizeMix::of(c.model, c.at(), d)?;
     specimen::check_fit("direct_shear", p.box_diameter, p.height, d)?;
     specimen::check_positive(
         "direct_shear",
@@ -153,7 +153,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         test: p.normal_pressure,
     };
     let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
-    let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
+    let (materials, contact, pairs) = c.model.scene_parts(c.at(), true)?;
     // Loose particles need about twice the specimen's height; the platen starts above that.
     let z_mid = 0.5 * p.height;
     let z_fill = 2.4 * p.height / (p.packing / 0.55);

@@ -4,7 +4,7 @@
 //! pores between the coarse grains, which changes packing, flow and strength (a candidate
 //! effect, `[candidates.fines]` in models/li2022.toml).
 
-use super::model::{Conditions, Model, evaluate};
+use super::model::{At, Model, evaluate_at};
 use anyhow::{Result, anyhow, bail};
 use std::f64::consts::PI;
 use toml::Value;
@@ -19,8 +19,8 @@ pub struct SizeMix {
 }
 
 impl SizeMix {
-    /// The model's mix at `conds` around the test's diameter `d`.
-    pub fn of(model: &Model, conds: &Conditions, d: f64) -> Result<SizeMix> {
+    /// The model's mix at `at` around the test's diameter `d`.
+    pub fn of(model: &Model, at: At, d: f64) -> Result<SizeMix> {
         let path = model.path.display();
         let Some(p) = &model.file.particles else {
             return Ok(SizeMix {
@@ -29,7 +29,7 @@ impl SizeMix {
         };
         let fine = match &p.fine_fraction {
             None => 0.0,
-            Some(form) => evaluate(form, conds)
+            Some(form) => evaluate_at(form, at)
                 .map_err(|e| anyhow!("{path}: particles.fine_fraction: {e}"))?,
         };
         if !(0.0..=0.5).contains(&fine) {

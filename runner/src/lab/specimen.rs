@@ -154,7 +154,7 @@ pub fn particles_for(
 /// The smallest restitution coefficient of the model's material pairs at these conditions
 /// (1 where a pair has none: undamped), for [`loaded_steps`].
 fn soil_restitution(c: &Common) -> Result<f64> {
-    let (_, _, pairs) = c.model.scene_parts(c.conditions, true)?;
+    let (_, _, pairs) = c.model.scene_parts(c.at(), true)?;
     Ok(pairs
         .as_array()
         .into_iter()
@@ -435,7 +435,7 @@ impl Preparation {
 /// bond spring (s): S the larger of the normal and shear stiffness per area, since either
 /// spring oscillates on that time scale.
 pub fn bond_time_scale(c: &Common, d: f64) -> Result<f64> {
-    let (_, _, pairs) = c.model.scene_parts(c.conditions, true)?;
+    let (_, _, pairs) = c.model.scene_parts(c.at(), true)?;
     let mut k_max: f64 = 0.0;
     for pair in pairs.as_array().into_iter().flatten() {
         let num = |k: &str| pair.get(k).and_then(Value::as_float);

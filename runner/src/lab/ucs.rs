@@ -97,7 +97,7 @@ const CATCHER_GAP: f64 = 0.04;
 
 pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
-    let mix = super::sizes::SizeMix::of(c.model, c.conditions, d)?;
+    let mix = super::sizes::SizeMix::of(c.model, c.at(), d)?;
     specimen::check_fit("ucs", p.mould_diameter, p.height, d)?;
     specimen::check_positive(
         "ucs",
@@ -143,7 +143,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
         test: p.reference_stress,
     };
     let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
-    let (materials, contact, pairs) = c.model.scene_parts(c.conditions, true)?;
+    let (materials, contact, pairs) = c.model.scene_parts(c.at(), true)?;
     let z_fill = 2.4 * p.height / (p.packing / 0.55);
     let z_top = z_fill + 2.0 * d;
     let duration = 4.0 * p.max_phase_time + p.max_strain * p.height / speed + 0.5;
