@@ -26,7 +26,7 @@ use super::calibrate::{
 use super::calibrate_report;
 use super::compare::{Measurement, experiment_text, mean_sd};
 use super::measurements::TESTS;
-use crate::lab::model::evaluate;
+use crate::lab::model::{At, evaluate_at};
 use crate::sweep::execute;
 use crate::sweep::plan::{Plan, PlannedRun};
 use anyhow::{Result, anyhow, bail};
@@ -370,7 +370,7 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         .map(|p| {
             let form = param_form(&model, p).expect("checked above");
             rows.first()
-                .and_then(|m| evaluate(form, &m.conditions).ok())
+                .and_then(|m| evaluate_at(form, At::test(&m.conditions, &m.test)).ok())
         })
         .collect();
     let json = serde_json::json!({
