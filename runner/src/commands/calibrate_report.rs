@@ -4,7 +4,7 @@
 use super::calibrate::{CalibrateArgs, ConditionResult, Param, describe};
 use super::model_edit::in_bond_only;
 use anyhow::{Context, Result, anyhow, bail};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use tilth_tools::calibrate::Posterior;
 
@@ -44,6 +44,7 @@ pub fn write_model(
     let mut doc: toml_edit::DocumentMut = text
         .parse()
         .with_context(|| format!("{}: not TOML", from.display()))?;
+    let declared = declared_conditions(&doc);
     let varying: Vec<&String> = results
         .first()
         .map(|r| {
@@ -53,6 +54,12 @@ pub fn write_model(
                 .collect()
         })
         .unwrap_or_default();
+    if let Some(k) = varying.iter().find(|k| !declared.contains(k.as_str())) {
+        bail!(
+            "calibrated values vary with {k}, which {} does not declare in `conditions`: a model value cannot depend on it; calibrate each {k} separately (--where {k}=...)",
+            from.display()
+        );
+    }
     for (i, p) in params.iter().enumerate() {
         let value: toml_edit::Value = match varying.as_slice() {
             [] => results[0].calibrated[i].into(),
@@ -85,11 +92,23 @@ pub fn write_model(
                     .join(", ")
             ),
         };
-        let fixed = shared_conditions(results.iter().map(|r| &r.conditions));
+        let mut fixed = shared_conditions(results.iter().map(|r| &r.conditions));
+        fixed.retain(|k, _| declared.contains(k));
         let value = only_where(&fixed, test, value, current(&doc, p));
         set(&mut doc, from, p, value, "tilth calibrate")?;
     }
     std::fs::write(to, doc.to_string()).with_context(|| format!("{}: cannot write", to.display()))
+}
+
+/// The conditions the model file declares (`conditions = { moisture_pct = [3, 12], ... }`).
+/// A measurement's other columns, such as the shear box's `normal_pressure_pa`, are settings
+/// of the test: an experiment does not evaluate the model at them, so a case naming them
+/// would never match.
+pub fn declared_conditions(doc: &toml_edit::DocumentMut) -> BTreeSet<String> {
+    doc.get("conditions")
+        .and_then(|c| c.as_table_like())
+        .map(|t| t.iter().map(|(k, _)| k.to_string()).collect())
+        .unwrap_or_default()
 }
 
 /// The conditions every one of `conds` has, with the same value in all.
@@ -221,9 +240,11 @@ pub fn write_constants(
     let mut doc: toml_edit::DocumentMut = text
         .parse()
         .with_context(|| format!("{}: not TOML", from.display()))?;
+    let mut fixed = fixed.clone();
+    fixed.retain(|k, _| declared_conditions(&doc).contains(k));
     for (p, v) in params.iter().zip(values) {
         let value = only_where(
-            fixed,
+            &fixed,
             None,
             toml_edit::Value::from((v * 1e6).round() / 1e6),
             current(&doc, p),
@@ -503,5 +524,36 @@ mod tests {
                 .len(),
             3
         );
+    }
+
+    /// The shear rows' `normal_pressure_pa` is a setting of the test, not a model condition:
+    /// a written case that named it would never match in a run.
+    #[test]
+    fn a_written_case_names_only_the_models_own_conditions() {
+        use crate::lab::model::{At, Model, evaluate_at};
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let dir = std::env::temp_dir().join(format!("tilth-declared-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let to = dir.join("model.toml");
+        let p = super::super::calibrate::parse_param("soil-soil.friction=0.4:1.0").unwrap();
+        let rows = fixed(&[
+            ("moisture_pct", 6.0),
+            ("firmness_mpa", 1.55),
+            ("normal_pressure_pa", 1e5),
+        ]);
+        write_constants(&root.join("models/li2022.toml"), &to, &[p], &[0.55], &rows).unwrap();
+        let model = Model::load(&to).unwrap();
+        let form = &model.file.pairs["soil-soil"]["friction"];
+        let here = fixed(&[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]);
+        assert_eq!(
+            evaluate_at(form, At::test(&here, "direct_shear")).unwrap(),
+            0.55
+        );
+        let elsewhere = fixed(&[("moisture_pct", 9.0), ("firmness_mpa", 1.55)]);
+        assert_eq!(
+            evaluate_at(form, At::test(&elsewhere, "direct_shear")).unwrap(),
+            0.8
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
