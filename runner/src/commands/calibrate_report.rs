@@ -60,6 +60,10 @@ pub fn write_model(
             from.display()
         );
     }
+    let fixed = declared_only(
+        &doc,
+        shared_conditions(results.iter().map(|r| &r.conditions)),
+    );
     for (i, p) in params.iter().enumerate() {
         let value: toml_edit::Value = match varying.as_slice() {
             [] => results[0].calibrated[i].into(),
@@ -92,8 +96,6 @@ pub fn write_model(
                     .join(", ")
             ),
         };
-        let mut fixed = shared_conditions(results.iter().map(|r| &r.conditions));
-        fixed.retain(|k, _| declared.contains(k));
         let value = only_where(&fixed, test, value, current(&doc, p));
         set(&mut doc, from, p, value, "tilth calibrate")?;
     }
@@ -104,11 +106,21 @@ pub fn write_model(
 /// A measurement's other columns, such as the shear box's `normal_pressure_pa`, are settings
 /// of the test: an experiment does not evaluate the model at them, so a case naming them
 /// would never match.
-pub fn declared_conditions(doc: &toml_edit::DocumentMut) -> BTreeSet<String> {
+fn declared_conditions(doc: &toml_edit::DocumentMut) -> BTreeSet<String> {
     doc.get("conditions")
         .and_then(|c| c.as_table_like())
         .map(|t| t.iter().map(|(k, _)| k.to_string()).collect())
         .unwrap_or_default()
+}
+
+/// `conds` without the columns the model does not declare ([`declared_conditions`]).
+fn declared_only(
+    doc: &toml_edit::DocumentMut,
+    mut conds: BTreeMap<String, f64>,
+) -> BTreeMap<String, f64> {
+    let declared = declared_conditions(doc);
+    conds.retain(|k, _| declared.contains(k));
+    conds
 }
 
 /// The conditions every one of `conds` has, with the same value in all.
@@ -240,8 +252,7 @@ pub fn write_constants(
     let mut doc: toml_edit::DocumentMut = text
         .parse()
         .with_context(|| format!("{}: not TOML", from.display()))?;
-    let mut fixed = fixed.clone();
-    fixed.retain(|k, _| declared_conditions(&doc).contains(k));
+    let fixed = declared_only(&doc, fixed.clone());
     for (p, v) in params.iter().zip(values) {
         let value = only_where(
             &fixed,
@@ -402,6 +413,13 @@ mod tests {
         evaluate(&t["v"], &c).unwrap()
     }
 
+    fn case_count(v: &toml_edit::Value) -> usize {
+        v.as_inline_table().unwrap()["cases"]
+            .as_array()
+            .unwrap()
+            .len()
+    }
+
     fn fixed(conds: &[(&str, f64)]) -> BTreeMap<String, f64> {
         conds.iter().map(|(k, v)| (k.to_string(), *v)).collect()
     }
@@ -450,8 +468,7 @@ mod tests {
             5.0.into(),
             Some(previous),
         );
-        let cases = v.as_inline_table().unwrap()["cases"].as_array().unwrap();
-        assert_eq!(cases.len(), 3);
+        assert_eq!(case_count(&v), 3);
         assert_eq!(
             at(&v, &[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
             5.0
@@ -471,10 +488,7 @@ mod tests {
             7.0.into(),
             Some(v),
         );
-        let cases = again.as_inline_table().unwrap()["cases"]
-            .as_array()
-            .unwrap();
-        assert_eq!(cases.len(), 3);
+        assert_eq!(case_count(&again), 3);
         assert_eq!(
             at(&again, &[("moisture_pct", 6.0), ("firmness_mpa", 1.55)]),
             7.0
@@ -506,24 +520,12 @@ mod tests {
         let w = only_where(&here, Some("direct_shear"), 3.0.into(), Some(v));
         assert_eq!(in_test(&w, &c, "ucs"), 4.0);
         assert_eq!(in_test(&w, &c, "direct_shear"), 3.0);
-        assert_eq!(
-            w.as_inline_table().unwrap()["cases"]
-                .as_array()
-                .unwrap()
-                .len(),
-            3
-        );
+        assert_eq!(case_count(&w), 3);
         // The same test again: its case is replaced.
         let again = only_where(&here, Some("ucs"), 5.0.into(), Some(w));
         assert_eq!(in_test(&again, &c, "ucs"), 5.0);
         assert_eq!(in_test(&again, &c, "direct_shear"), 3.0);
-        assert_eq!(
-            again.as_inline_table().unwrap()["cases"]
-                .as_array()
-                .unwrap()
-                .len(),
-            3
-        );
+        assert_eq!(case_count(&again), 3);
     }
 
     /// The shear rows' `normal_pressure_pa` is a setting of the test, not a model condition:
