@@ -398,6 +398,30 @@ impl Plan {
     /// its levels and then every whole run must give a valid scene.
     fn check(&self, source: &Source) -> Result<()> {
         let sweep: SweepFile = file::parse(source)?;
+        // The design numbers the seeds (run k: `[design] seed` + k - 1): a seed given as a
+        // factor or a fixed value would be overwritten in every run without a word.
+        let seed_set = |path: &str| path.trim_start_matches("scene:") == "simulation.seed";
+        let seed_refusal = "is set per run by the design: run k uses `[design] seed` + k - 1 \
+                            (default seed 1); for several seeds per setting use `[design] \
+                            replicates`";
+        for f in &sweep.factors {
+            let target = &f.get_ref().target;
+            if seed_set(target.get_ref()) {
+                return Err(source.err(
+                    &target.span(),
+                    format!(
+                        "factor `{}`: `simulation.seed` {seed_refusal}",
+                        f.get_ref().name.get_ref()
+                    ),
+                ));
+            }
+        }
+        if let Some((path, value)) = sweep.fixed.iter().find(|(p, _)| seed_set(p)) {
+            return Err(source.err(
+                &value.span(),
+                format!("fixed `{path}`: `simulation.seed` {seed_refusal}"),
+            ));
+        }
         self.record
             .resolve(1e-9)
             .map_err(|e| anyhow!("{}: [record] {e}", source.path.display()))?;
