@@ -131,7 +131,8 @@ pub struct SolveArgs {
     /// Settings to print per target (evenly spaced along the solutions; JSON has them all).
     #[arg(long, default_value_t = 11)]
     pub show: usize,
-    /// Draw each target's contour plot here (two free factors).
+    /// Draw each target's contour plot here (two free factors), or the response against the
+    /// one free factor with every target on it (`solve-RESPONSE.svg`).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     #[arg(long)]
@@ -286,6 +287,9 @@ fn solve(a: &SolveArgs, out: &mut dyn Write) -> Result<()> {
             if let Some(path) = super::rsm_plot::contour(&anova, s, &fixed, dir)? {
                 eprintln!("plot {}", path.display());
             }
+        }
+        if let Some(path) = super::rsm_plot::curve(&anova, &solutions, &fixed, dir)? {
+            eprintln!("plot {}", path.display());
         }
     }
     if a.json {

@@ -42,6 +42,22 @@ pub fn contour(
     }
 }
 
+/// The response against the one free factor, with every target and its setting.
+pub fn curve(
+    a: &Anova,
+    solutions: &[Solution],
+    fixed: &[(usize, f64)],
+    dir: &Path,
+) -> Result<Option<PathBuf>> {
+    match plot::response_curve_svg(a, solutions, fixed)? {
+        Some(svg) => Ok(Some(write(
+            dir.join(format!("solve-{}.svg", slug(&a.response))),
+            svg,
+        )?)),
+        None => Ok(None),
+    }
+}
+
 /// Pareto, main-effects and predicted-vs-actual pictures of a fit.
 pub fn fit(a: &Anova, dir: &Path) -> Result<Vec<PathBuf>> {
     let r = slug(&a.response);

@@ -128,6 +128,80 @@ fn solve_states_the_ridge_and_draws_it() {
 }
 
 #[test]
+fn solve_draws_the_response_against_one_free_factor_with_its_runs_and_targets() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-solve-curve");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // y = 10 + 2 x plus fixed scatter, two runs per level.
+    let noise = [0.3, -0.2, 0.1, -0.4, 0.2, 0.0, -0.1, 0.4, -0.3, 0.1];
+    let mut csv = String::from("x,y\n");
+    for (k, e) in noise.iter().enumerate() {
+        let x = (k % 5) as f64;
+        csv += &format!("{x},{}\n", 10.0 + 2.0 * x + e);
+    }
+    let data = dir.join("runs.csv");
+    std::fs::write(&data, csv).unwrap();
+    let plots = dir.join("plots");
+    let out = tilth(&[
+        "rsm",
+        "solve",
+        data.to_str().unwrap(),
+        "--response",
+        "y",
+        "--factors",
+        "x",
+        "--target",
+        "low=12.5,high=16.25",
+        "--plot",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(plots.join("solve-y.svg")).unwrap();
+    // Ten runs as points (plus the legend's), both targets labelled with their setting.
+    assert!(svg.matches("<circle").count() >= noise.len(), "{svg}");
+    assert!(
+        svg.contains("low: x = 1.2") && svg.contains("high: x = 3.1"),
+        "{svg}"
+    );
+
+    // Three factors, two held: the curve along the third, without runs (they lie elsewhere).
+    let plots = dir.join("plots-t9");
+    let out = tilth(&[
+        "rsm",
+        "solve",
+        T9,
+        "--response",
+        "repose_angle_deg",
+        "--factors",
+        "x4_coded,x6_coded,x7_coded",
+        "--names",
+        "x4,x6,x7",
+        "--levels",
+        "x4_coded=0.25:0.65,x6_coded=0.15:0.35,x7_coded=0.125:0.625",
+        "--model",
+        "quadratic",
+        "--fix",
+        "x4=0.45,x7=0.375",
+        "--target",
+        "6%=35.53",
+        "--plot",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(plots.join("solve-repose_angle_deg.svg")).unwrap();
+    assert!(svg.contains("x4 = 0.45") && svg.contains("6%: "), "{svg}");
+    assert!(!svg.contains("runs ("), "{svg}");
+}
+
+#[test]
 fn refusals_name_the_problem() {
     let out = tilth(&[
         "rsm",

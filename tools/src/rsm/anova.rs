@@ -106,6 +106,8 @@ pub struct Anova {
 /// One run's fit.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunDiagnostic {
+    /// The run's factor settings, real units, in the order of `factors`.
+    pub settings: Vec<f64>,
     pub actual: f64,
     pub predicted: f64,
     pub residual: f64,
@@ -448,9 +450,11 @@ fn analyse(
         notes,
         diagnostics: y
             .iter()
+            .zip(&data.x)
             .zip(&full.fitted)
             .zip(&full.leverage)
-            .map(|((a, f), h)| RunDiagnostic {
+            .map(|(((a, x), f), h)| RunDiagnostic {
+                settings: x.clone(),
                 actual: *a,
                 predicted: *f,
                 residual: a - f,

@@ -1,4 +1,5 @@
-//! SVG pictures of a response surface: contour plot with a target line, Pareto chart of the
+//! SVG pictures of a response surface: contour plot with a target line, the response against
+//! one free factor with its targets, Pareto chart of the
 //! standardized effects, main effects, predicted against actual.
 //!
 //! Drawn as the reducers' pictures are (plotters' SVG backend, text left to the viewer).
@@ -206,6 +207,161 @@ pub fn contour_marked_svg(
         root.present().map_err(err(WHAT))?;
     }
     Ok(Some(svg))
+}
+
+/// The fitted response against the one free factor (the others at their fixed values or
+/// centres), its 95 % confidence band of the mean, each target as a dashed line with the
+/// setting that hits it marked, and, when the model has that one factor only, the runs.
+/// `None` unless exactly one factor is free.
+pub fn response_curve_svg(
+    a: &Anova,
+    solutions: &[Solution],
+    fixed: &[(usize, f64)],
+) -> Result<Option<String>, RsmError> {
+    const WHAT: &str = "the response curve";
+    let free: Vec<usize> = (0..a.factors.len())
+        .filter(|i| !fixed.iter().any(|f| f.0 == *i))
+        .collect();
+    let [i] = free[..] else {
+        return Ok(None);
+    };
+    let mut base: Vec<f64> = (0..a.factors.len()).map(|k| a.coding.centre(k)).collect();
+    for (k, v) in fixed {
+        base[*k] = *v;
+    }
+    let (x0, x1) = (a.coding.low[i], a.coding.high[i]);
+    let df = a.residual_df().max(1) as f64;
+    let t = StudentsT::new(0.0, 1.0, df)
+        .map_err(err(WHAT))?
+        .inverse_cdf(0.975);
+    // (x, fitted, half-width of the band)
+    let curve: Vec<(f64, f64, f64)> = (0..=80)
+        .map(|s| {
+            let mut x = base.clone();
+            x[i] = x0 + (x1 - x0) * s as f64 / 80.0;
+            let z = a.coding.code(&x);
+            let half = a.mean_std_error(&z).map_or(0.0, |se| t * se);
+            (x[i], a.predict_coded(&z), half)
+        })
+        .collect();
+    let runs: Vec<(f64, f64)> = if a.factors.len() == 1 {
+        a.diagnostics
+            .iter()
+            .map(|d| (d.settings[0], d.actual))
+            .collect()
+    } else {
+        vec![]
+    };
+    let ys = curve
+        .iter()
+        .flat_map(|c| [c.1 - c.2, c.1 + c.2])
+        .chain(runs.iter().map(|r| r.1))
+        .chain(solutions.iter().map(|s| s.target));
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+        (l.min(v), h.max(v))
+    });
+    let pad = 0.06 * (hi - lo).max(1e-9);
+    let (xlo, xhi) = (x0.min(x1), x0.max(x1));
+    let fixed_text: Vec<String> = fixed
+        .iter()
+        .map(|(k, v)| format!("{} = {v}", a.factors[*k]))
+        .collect();
+    let mut title = format!("{} against {}", a.response, a.factors[i]);
+    if !fixed_text.is_empty() {
+        title += &format!(" ({})", fixed_text.join(", "));
+    }
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (760, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(err(WHAT))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(&title, (FONT, 17))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(xlo..xhi, (lo - pad)..(hi + pad))
+            .map_err(err(WHAT))?;
+        chart
+            .configure_mesh()
+            .x_desc(a.factors[i].as_str())
+            .y_desc(a.response.as_str())
+            .label_style((FONT, 12))
+            .draw()
+            .map_err(err(WHAT))?;
+        let band: Vec<(f64, f64)> = curve
+            .iter()
+            .map(|c| (c.0, c.1 + c.2))
+            .chain(curve.iter().rev().map(|c| (c.0, c.1 - c.2)))
+            .collect();
+        chart
+            .draw_series([Polygon::new(band, BLUE.mix(0.18).filled())])
+            .map_err(err(WHAT))?
+            .label(format!(
+                "95 % confidence band of the mean ({} df)",
+                a.residual_df()
+            ))
+            .legend(|(x, y)| {
+                Rectangle::new([(x, y - 5), (x + 20, y + 5)], BLUE.mix(0.18).filled())
+            });
+        chart
+            .draw_series(LineSeries::new(
+                curve.iter().map(|c| (c.0, c.1)),
+                BLUE.stroke_width(2),
+            ))
+            .map_err(err(WHAT))?
+            .label(format!("{} model, R^2 {:.4}", a.order.name(), a.r2))
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLUE.stroke_width(2)));
+        if !runs.is_empty() {
+            chart
+                .draw_series(runs.iter().map(|p| Circle::new(*p, 4, GREY.filled())))
+                .map_err(err(WHAT))?
+                .label(format!("runs ({})", runs.len()))
+                .legend(|(x, y)| Circle::new((x + 10, y), 4, GREY.filled()));
+        }
+        for s in solutions {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(xlo, s.target), (xhi, s.target)],
+                    6,
+                    4,
+                    RED.stroke_width(1),
+                ))
+                .map_err(err(WHAT))?;
+            let hit = s.settings.iter().map(|st| st.values[i]);
+            let label = match s.settings.len() {
+                0 => format!("{} = {}: out of range", s.label, s.target),
+                1 => format!(
+                    "{}: {} = {}",
+                    s.label,
+                    a.factors[i],
+                    significant(s.settings[0].values[i], 5)
+                ),
+                n => format!("{}: {n} settings", s.label),
+            };
+            chart
+                .draw_series(hit.map(|x| Cross::new((x, s.target), 6, RED.stroke_width(2))))
+                .map_err(err(WHAT))?;
+            chart
+                .draw_series([Text::new(
+                    label,
+                    (xlo + 0.01 * (xhi - xlo), s.target),
+                    (FONT, 11).into_font().color(&RED),
+                )])
+                .map_err(err(WHAT))?;
+        }
+        legend(&mut chart, WHAT)?;
+        root.present().map_err(err(WHAT))?;
+    }
+    Ok(Some(svg))
+}
+
+/// `v` to `digits` significant digits, without an exponent for everyday magnitudes.
+fn significant(v: f64, digits: i32) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (digits - 1 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
 }
 
 /// About `n` round levels strictly inside (lo, hi).
