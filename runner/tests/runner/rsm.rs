@@ -1,7 +1,8 @@
 //! `tilth rsm` from the command line: the JSON contract, the published-table check, solving
 //! and its pictures, and refusals.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 use crate::tilth_in_root as tilth;
 
@@ -84,11 +85,9 @@ fn fit_text_shows_the_x4_discrepancy() {
     );
 }
 
-#[test]
-fn solve_states_the_ridge_and_draws_it() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-solve");
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = tilth(&[
+/// `tilth rsm solve` on table 9's quadratic in the study's units, `fix`ed, drawing into `plot`.
+fn solve_t9(fix: &str, targets: &str, plot: &Path) -> Output {
+    tilth(&[
         "rsm",
         "solve",
         T9,
@@ -103,12 +102,19 @@ fn solve_states_the_ridge_and_draws_it() {
         "--model",
         "quadratic",
         "--fix",
-        "x4=0.45",
+        fix,
         "--target",
-        "3%=32.76,6%=35.53,9%=37.89,12%=43.87",
+        targets,
         "--plot",
-        dir.to_str().unwrap(),
-    ]);
+        plot.to_str().unwrap(),
+    ])
+}
+
+#[test]
+fn solve_states_the_ridge_and_draws_it() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-solve");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = solve_t9("x4=0.45", "3%=32.76,6%=35.53,9%=37.89,12%=43.87", &dir);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
@@ -170,27 +176,7 @@ fn solve_draws_the_response_against_one_free_factor_with_its_runs_and_targets() 
 
     // Three factors, two held: the curve along the third, without runs (they lie elsewhere).
     let plots = dir.join("plots-t9");
-    let out = tilth(&[
-        "rsm",
-        "solve",
-        T9,
-        "--response",
-        "repose_angle_deg",
-        "--factors",
-        "x4_coded,x6_coded,x7_coded",
-        "--names",
-        "x4,x6,x7",
-        "--levels",
-        "x4_coded=0.25:0.65,x6_coded=0.15:0.35,x7_coded=0.125:0.625",
-        "--model",
-        "quadratic",
-        "--fix",
-        "x4=0.45,x7=0.375",
-        "--target",
-        "6%=35.53",
-        "--plot",
-        plots.to_str().unwrap(),
-    ]);
+    let out = solve_t9("x4=0.45,x7=0.375", "6%=35.53", &plots);
     assert!(
         out.status.success(),
         "{}",

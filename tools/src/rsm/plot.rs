@@ -4,7 +4,7 @@
 //!
 //! Drawn as the reducers' pictures are (plotters' SVG backend, text left to the viewer).
 
-use super::{Anova, RsmError, Solution};
+use super::{Anova, RsmError, Solution, significant};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::RGBColor;
@@ -353,15 +353,6 @@ pub fn response_curve_svg(
         root.present().map_err(err(WHAT))?;
     }
     Ok(Some(svg))
-}
-
-/// `v` to `digits` significant digits, without an exponent for everyday magnitudes.
-fn significant(v: f64, digits: i32) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let decimals = (digits - 1 - v.abs().log10().floor() as i32).max(0) as usize;
-    format!("{v:.decimals$}")
 }
 
 /// About `n` round levels strictly inside (lo, hi).
