@@ -188,7 +188,7 @@ pub fn execute(plan: &Plan, opts: &Options, stop: Arc<AtomicBool>) -> Result<Out
                     }
                     if summary.status == Status::Failed {
                         failed += 1;
-                        progress.println(format!(
+                        progress.println_unless_logging(format!(
                             "run {} failed: {}",
                             summary.run.id,
                             summary.error.as_deref().unwrap_or("")
@@ -197,6 +197,7 @@ pub fn execute(plan: &Plan, opts: &Options, stop: Arc<AtomicBool>) -> Result<Out
                     if summary.status != Status::Interrupted {
                         progress.done.inc(1);
                     }
+                    progress.log_finished(&summary, todo);
                     rows.insert(summary.run.id, Row::from_summary(&summary));
                     write_manifest(&rows)?;
                 }
@@ -218,15 +219,19 @@ pub fn execute(plan: &Plan, opts: &Options, stop: Arc<AtomicBool>) -> Result<Out
     })
 }
 
-/// The sweep bar and one bar per running run, on stderr when it is a terminal.
+/// The sweep bar and one bar per running run, on stderr when it is a terminal; when it is not
+/// (a log file, `nohup`, a batch job), one line per finished run instead, so that a log shows
+/// how far a sweep got and what each run read.
 struct SweepProgress {
     multi: MultiProgress,
     done: ProgressBar,
+    lines: bool,
 }
 
 impl SweepProgress {
     fn new(todo: usize, show: bool) -> SweepProgress {
-        let target = if show && std::io::stderr().is_terminal() {
+        let terminal = std::io::stderr().is_terminal();
+        let target = if show && terminal {
             ProgressDrawTarget::stderr()
         } else {
             ProgressDrawTarget::hidden()
@@ -240,7 +245,19 @@ impl SweepProgress {
             .expect("valid template")
             .progress_chars("=> "),
         );
-        SweepProgress { multi, done }
+        SweepProgress {
+            multi,
+            done,
+            lines: show && !terminal,
+        }
+    }
+
+    /// `[3/10] run 3 (tau_c = 400000) done in 173 s: peak_shear_force_n = 311`, when stderr is
+    /// not a terminal.
+    fn log_finished(&self, summary: &RunSummary, todo: usize) {
+        if self.lines {
+            eprintln!("{}", finished_line(summary, self.done.position(), todo));
+        }
     }
 
     fn run_bar(&self, run: &PlannedRun) -> ProgressBar {
@@ -275,7 +292,12 @@ impl SweepProgress {
             .set_message(format!("{} running, {failed} failed{stop}", running.len()));
     }
 
-    fn println(&self, msg: String) {
+    /// A message above the bars (or on its own line without them), unless the finished-run
+    /// line that says the same is written.
+    fn println_unless_logging(&self, msg: String) {
+        if self.lines {
+            return;
+        }
         if self.done.is_hidden() {
             eprintln!("{msg}");
         } else {
@@ -286,6 +308,40 @@ impl SweepProgress {
     fn finish(&self) {
         self.done.finish_and_clear();
     }
+}
+
+/// One finished run in a log: its place in this invocation, its factor settings, status, wall
+/// time and the observable reduced from its MCAP file.
+fn finished_line(summary: &RunSummary, done: u64, todo: usize) -> String {
+    let run = &summary.run;
+    let settings: Vec<String> = run
+        .values
+        .iter()
+        .map(|(name, value)| format!("{name} = {}", num(*value)))
+        .collect();
+    let mut line = format!(
+        "[{done}/{todo}] run {} ({}, seed {}) {} in {:.0} s",
+        run.id,
+        settings.join(", "),
+        run.seed,
+        summary.status.as_str(),
+        summary.wall_seconds
+    );
+    let observables = ["repose_angle_deg", "peak_shear_force_n", "ucs_kpa"];
+    if let Some(reduced) = summary.reduced.as_ref().and_then(|r| r.as_object()) {
+        for key in observables {
+            if let Some(v) = reduced.get(key).and_then(|v| v.as_f64()) {
+                line.push_str(&format!(": {key} = {v:.2}"));
+            }
+        }
+        if let Some(e) = reduced.get("error").and_then(|e| e.as_str()) {
+            line.push_str(&format!(": not reduced ({e})"));
+        }
+    }
+    if let Some(e) = &summary.error {
+        line.push_str(&format!(": {e}"));
+    }
+    line
 }
 
 /// Every run of the sweep (all shards) with its status and observables, from the run

@@ -307,6 +307,54 @@ fn sigterm_stops_cleanly_and_the_same_command_finishes() {
 }
 
 #[test]
+fn a_sweep_logged_to_a_file_writes_one_line_per_finished_run() {
+    let out = std::env::temp_dir().join(format!("tilth-log-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    // `output()` pipes stderr: not a terminal, as under nohup or a batch system.
+    let logged = tilth()
+        .args(["sweep", "run", "--cores", "1", "--out"])
+        .arg(&out)
+        .arg(sweeps("tiny.toml"))
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&logged.stderr);
+    assert!(logged.status.success(), "{log}");
+    let lines: Vec<&str> = log.lines().filter(|l| l.contains("] run ")).collect();
+    assert_eq!(lines.len(), 4, "{log}");
+    for row in manifest_rows(&out) {
+        let id = row["id"].as_u64().unwrap();
+        let summary: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out.join(format!("runs/{id:03}/summary.json"))).unwrap(),
+        )
+        .unwrap();
+        let run = &summary["run"];
+        let friction = run["values"]["friction"].as_f64().unwrap();
+        let line = lines
+            .iter()
+            .find(|l| l.contains(&format!("] run {id} (")))
+            .unwrap_or_else(|| panic!("no line for run {id}: {log}"));
+        assert!(line.contains(&format!("friction = {friction}")), "{line}");
+        assert!(line.contains(&format!("seed {}", run["seed"])), "{line}");
+        assert!(line.contains(" done in "), "{line}");
+        let secs = summary["wall_seconds"].as_f64().unwrap();
+        assert!(line.contains(&format!("in {secs:.0} s")), "{line}");
+    }
+    // Runs finish in order on one core: the counter climbs 1/4 .. 4/4.
+    for (k, line) in lines.iter().enumerate() {
+        assert!(line.starts_with(&format!("[{}/4] ", k + 1)), "{line}");
+    }
+    // `--quiet` keeps the log empty; a finished sweep has nothing left to run.
+    let quiet = run_sweep(&out);
+    assert!(quiet.status.success());
+    assert!(
+        !String::from_utf8_lossy(&quiet.stderr).contains("] run "),
+        "{}",
+        String::from_utf8_lossy(&quiet.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
 fn two_thread_runs_take_two_cores_and_give_the_same_results() {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let base = std::env::temp_dir().join(format!("tilth-two-{}", std::process::id()));
