@@ -310,6 +310,10 @@ impl SweepProgress {
     }
 }
 
+/// The observables a run's summary holds as reduced from its MCAP file (`RunSummary::reduced`),
+/// in the order of results.csv's columns.
+const REDUCED: [&str; 3] = ["repose_angle_deg", "peak_shear_force_n", "ucs_kpa"];
+
 /// One finished run in a log: its place in this invocation, its factor settings, status, wall
 /// time and the observable reduced from its MCAP file.
 fn finished_line(summary: &RunSummary, done: u64, todo: usize) -> String {
@@ -327,9 +331,8 @@ fn finished_line(summary: &RunSummary, done: u64, todo: usize) -> String {
         summary.status.as_str(),
         summary.wall_seconds
     );
-    let observables = ["repose_angle_deg", "peak_shear_force_n", "ucs_kpa"];
     if let Some(reduced) = summary.reduced.as_ref().and_then(|r| r.as_object()) {
-        for key in observables {
+        for key in REDUCED {
             if let Some(v) = reduced.get(key).and_then(|v| v.as_f64()) {
                 line.push_str(&format!(": {key} = {v:.2}"));
             }
@@ -353,12 +356,10 @@ pub fn write_results(plan: &Plan, out: &Path) -> Result<Vec<Vec<String>>> {
         .map(|s| s.to_string())
         .collect();
     head.extend(plan.factors.iter().map(|f| f.name.clone()));
+    head.push("status".to_string());
+    head.extend(REDUCED.iter().map(|s| s.to_string()));
     head.extend(
         [
-            "status",
-            "repose_angle_deg",
-            "peak_shear_force_n",
-            "ucs_kpa",
             "heap_cone_angle_deg",
             "heap_height_m",
             "particles",
@@ -384,7 +385,7 @@ pub fn write_results(plan: &Plan, out: &Path) -> Result<Vec<Vec<String>>> {
         ];
         line.extend(plan.factors.iter().map(|f| num(run.values[&f.name])));
         line.push(row.status.as_str().to_string());
-        for key in ["repose_angle_deg", "peak_shear_force_n", "ucs_kpa"] {
+        for key in REDUCED {
             line.push(get(&|s| s.reduced.as_ref()?.get(key)?.as_f64()));
         }
         line.push(get(&|s| s.heap.as_ref()?.get("cone_angle_deg")?.as_f64()));
