@@ -51,8 +51,9 @@ pub struct CompareArgs {
     #[arg(long)]
     pub quiet: bool,
     /// Keep the runs in this directory, keyed by the model's values (not its comments), the
-    /// test, the conditions, the seeds and this build of tilth, and reuse any run already
-    /// there, whichever command made it (one command at a time per cache).
+    /// test, the conditions, the first seed and this build of tilth, and reuse any run
+    /// already there, whichever command made it (one command at a time per cache). More
+    /// --replicates later (here or in --out) run only the new seeds.
     #[arg(long)]
     pub cache: Option<PathBuf>,
 }
@@ -151,9 +152,9 @@ pub struct Simulate<'a> {
     pub cores: Option<usize>,
     pub quiet: bool,
     /// A run cache shared between commands: runs go to `cache/<test>-<key>/`, the key made of
-    /// the model file's content, the test, the conditions, the seeds and the build of tilth
-    /// (a hash of its executable), so that any command
-    /// that needs the same runs finds them done (`--cache`).
+    /// the model file's content, the test, the conditions, the first seed and the build of
+    /// tilth (a hash of its executable), so that any command that needs the same runs, or
+    /// more replicates of them, finds them done (`--cache`).
     pub cache: Option<&'a Path>,
 }
 
@@ -182,7 +183,7 @@ pub fn simulate(
     let mut plans = vec![];
     for test in &tests {
         let factors = condition_factors(test);
-        let mut runs = vec![];
+        let mut conditions: Vec<BTreeMap<String, f64>> = vec![];
         let mut seen: Vec<&BTreeMap<String, f64>> = vec![];
         for (i, m) in rows.iter().enumerate().filter(|(_, m)| m.test == *test) {
             if let Some(g) = seen.iter().position(|c| **c == m.conditions) {
@@ -191,32 +192,46 @@ pub fn simulate(
             }
             seen.push(&m.conditions);
             group[i] = seen.len();
-            for r in 0..how.replicates {
-                let mut values = BTreeMap::new();
-                for f in &factors {
-                    let v = m.conditions.get(&f.name).ok_or_else(|| {
-                        anyhow!(
-                            "{}: row {}: a {test} row needs `{}`",
-                            how.data.display(),
-                            m.row,
-                            f.name
-                        )
-                    })?;
-                    values.insert(f.name.clone(), *v);
-                }
+            let mut values = BTreeMap::new();
+            for f in &factors {
+                let v = m.conditions.get(&f.name).ok_or_else(|| {
+                    anyhow!(
+                        "{}: row {}: a {test} row needs `{}`",
+                        how.data.display(),
+                        m.row,
+                        f.name
+                    )
+                })?;
+                values.insert(f.name.clone(), *v);
+            }
+            conditions.push(values);
+        }
+        // Replicate-major: every condition's first seed, then every condition's second, ...
+        // so that asking for more replicates later appends runs and keeps the numbers (and
+        // the finished runs) of those already done.
+        let mut runs = vec![];
+        for r in 0..how.replicates {
+            for (k, values) in conditions.iter().enumerate() {
                 runs.push(PlannedRun {
                     id: runs.len() + 1,
-                    std: seen.len(),
+                    std: k + 1,
                     replicate: r + 1,
                     coded: BTreeMap::new(),
-                    values,
+                    values: values.clone(),
                     seed: how.first_seed + r as u64,
                 });
             }
         }
         let text = experiment_text(test, &model, how.coarse);
-        let plan = Plan::generated(test, text, Path::new("."), factors, runs)
+        let mut plan = Plan::generated(test, text, Path::new("."), factors, runs)
             .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
+        // The sweep's identity leaves out how many replicates it has (each run is still
+        // checked against its own seed and conditions when it is reused).
+        plan.fingerprint = fnv1a(&[
+            &plan.sweep_text,
+            &serde_json::to_string(&conditions)?,
+            &how.first_seed.to_string(),
+        ]);
         let dir = match how.cache {
             Some(cache) => cache.join(format!(
                 "{test}-{}",

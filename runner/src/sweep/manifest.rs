@@ -56,7 +56,12 @@ impl Row {
             wall_seconds: None,
             error: None,
         };
-        match read_summary(&dir).filter(|s| s.fingerprint == fingerprint) {
+        // The run's own seed and values too: a sweep whose identity leaves out its number of
+        // replicates (`tilth compare`) must not take another run's summary for this one.
+        let ours = |s: &RunSummary| {
+            s.fingerprint == fingerprint && s.run.seed == run.seed && s.run.values == run.values
+        };
+        match read_summary(&dir).filter(ours) {
             Some(s) if s.status == Status::Done && dir.join("run.mcap").exists() => {
                 row.status = Status::Done;
                 row.mcap = Some(rel("run.mcap"));
@@ -126,6 +131,14 @@ pub fn claim(out: &Path, plan: &Plan) -> Result<()> {
                 stamp.fingerprint,
                 plan.fingerprint
             );
+        }
+        if stamp.runs != plan.runs.len() {
+            // The same sweep with more (or fewer) replicates: the runs done stay.
+            let grown = Stamp {
+                runs: plan.runs.len(),
+                ..stamp
+            };
+            write_atomic(&stamp_path, &serde_json::to_vec_pretty(&grown)?)?;
         }
         return Ok(());
     }

@@ -118,3 +118,100 @@ fn a_cache_is_shared_by_commands_and_keyed_by_the_models_content() {
     assert_eq!(run_dirs(&cache).len(), 2);
     assert_eq!(mtimes(&dirs[0]), before);
 }
+
+fn simulated(compare_json: &Path) -> Vec<f64> {
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(compare_json).unwrap()).unwrap();
+    v["rows"][0]["simulated"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+/// Asking for more replicates in a directory that holds fewer runs only the new seeds: the
+/// finished runs stay (summary files untouched, the same values first in `compare.json`),
+/// in an output directory and in a cache alike.
+#[test]
+fn more_replicates_later_run_only_the_new_seeds() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cache-more-replicates");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = dir.join("data.csv");
+    std::fs::write(&data, DATA).unwrap();
+    let cache = dir.join("cache");
+    let compare = |replicates: &str, cached: bool| {
+        let out = dir.join(if cached { "cached" } else { "plain" });
+        let mut args = vec![
+            "compare",
+            "--model",
+            "models/li2022.toml",
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--replicates",
+            replicates,
+            "--coarse",
+            "--quiet",
+        ];
+        if cached {
+            args.extend(["--cache", cache.to_str().unwrap()]);
+        }
+        let o = tilth(&args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        simulated(&out.join("compare.json"))
+    };
+    let summaries = |runs: &Path| -> Vec<(PathBuf, std::time::SystemTime)> {
+        let mut v: Vec<_> = std::fs::read_dir(runs)
+            .unwrap()
+            .map(|e| e.unwrap().path().join("summary.json"))
+            .map(|p| {
+                let t = std::fs::metadata(&p).unwrap().modified().unwrap();
+                (p, t)
+            })
+            .collect();
+        v.sort();
+        v
+    };
+
+    let one = compare("1", false);
+    let runs = dir.join("plain/repose/runs");
+    let before = summaries(&runs);
+    assert_eq!((one.len(), before.len()), (1, 1));
+    let three = compare("3", false);
+    let after = summaries(&runs);
+    assert_eq!(three.len(), 3, "{three:?}");
+    assert_eq!(three[0].to_bits(), one[0].to_bits(), "seed 1 changed");
+    assert_eq!(after.len(), 3);
+    assert_eq!(after[0], before[0], "the finished run was redone");
+    assert!(
+        three[1] != three[0] || three[2] != three[0],
+        "new seeds gave the same heap: {three:?}"
+    );
+
+    let cached_one = compare("1", true);
+    assert_eq!(cached_one[0].to_bits(), one[0].to_bits());
+    let dirs = run_dirs(&cache);
+    assert_eq!(dirs.len(), 1, "{dirs:?}");
+    let before = summaries(&dirs[0].join("runs"));
+    let cached_two = compare("2", true);
+    assert_eq!(
+        run_dirs(&cache),
+        dirs,
+        "more replicates made another cache entry"
+    );
+    let after = summaries(&dirs[0].join("runs"));
+    assert_eq!(after.len(), 2);
+    assert_eq!(after[0], before[0], "the cached run was redone");
+    assert_eq!(
+        cached_two[..],
+        three[..2],
+        "the cache and the plain directory disagree"
+    );
+}
