@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The reference study (Li et al. 2022) as one pipeline, with tilth's own simulations.
 
-    sweeps/li2022/pipeline.py OUT [--cores N] [--replicates N] [--tilth PATH]
+    sweeps/li2022/pipeline.py OUT [--cores N] [--replicates N] [--bonds MODEL]
+                              [--bond-replicates N] [--stages STAGE,...] [--tilth PATH]
 
 Plackett-Burman screening (pb.toml, table 6) -> its ANOVA beside the study's (table 7) ->
 the steepest-ascent path (steepest_ascent.toml, table 8) -> the next design's ranges from the
@@ -10,7 +11,11 @@ path's best run (`tilth rsm next`, as the study chose table 9's levels) -> Box-B
 equations 10-13) and the angle's own fit solved for each moisture's measured angle (the
 ridge) -> one setting per moisture (restitution at the study's 0.45, the ridge point nearest
 the design centre) -> validation runs of the funnel test at each moisture with several seeds
-(`tilth compare`) against table 1, beside the study's own validation (table 11).
+(`tilth compare`) against table 1, beside the study's own validation (table 11) -> the
+bonded specimens: the direct shear box and the unconfined compression test at every
+condition of tables 12 and 13, with the bond strengths of a calibrated model file (`--bonds`,
+by default docs/li2022-statistics/per-test-bonds.toml, whose calibration that document
+describes), against the measurements and beside the study's own simulated values.
 
 Everything is written under OUT: each sweep's runs and results.csv, every command's output,
 the calibrated model (OUT/model.toml) and OUT/report.md, which puts each of the study's
@@ -37,6 +42,15 @@ MOISTURES = [3, 6, 9, 12]
 FACTORS7 = ["x1", "x2", "x3", "x4", "x5", "x6", "x7"]
 PATH_FACTORS = ["x4", "x6", "x7"]
 STUDY_RESTITUTION = 0.45  # table 11: the study fixed x4 at 0.45 for every moisture
+STAGES = ["repose", "bonds"]
+# The study's error bands (its worst errors, section "What the study calibrated" of
+# shared/docs/experiments.md): peak shear force 3.71-6.53 %, UCS 0.6-8.07 %.
+BOND_TABLES = [
+    # (test, observable, study table, its CSV, measured column, simulated column, band %)
+    ("direct_shear", "peak_shear_force_n", 12, "table12_shear_peak_force.csv",
+     "peak_shear_force_measured_n", "peak_shear_force_simulated_n", 6.53),
+    ("ucs", "ucs_kpa", 13, "table13_ucs_peak.csv", "measured_value", "simulated_value", 8.07),
+]
 
 
 def read_csv(path):
@@ -301,6 +315,75 @@ class Pipeline:
         self.p()
         self.p(f"Worst error: tilth {worst:.2f} %, the study 4.72 % (its table 11 at 12 %).")
 
+    # 6. Bonds: tables 12 and 13 ----------------------------------------------------------
+    def bonds(self, model, replicates):
+        """The shear box and the UCS test at every condition of tables 12 and 13.
+
+        The bond strengths come from `model`, calibrated beforehand (per test and condition:
+        a sweep over the bond shear strength, `tilth rsm fit` / `solve`, checked with
+        `tilth compare`; docs/li2022-statistics.md). This stage re-runs every specimen with
+        fresh runs of this build and puts the result beside the study's tables.
+        """
+        coarse = '"coarse" = true' in (HERE / "pb.toml").read_text()
+        argv = ["compare", "--model", model, "--data", REPO / "data" / "li2022" / "measurements.csv",
+                "--tests", "direct_shear,ucs", "--replicates", replicates,
+                "--cores", self.cores, "--out", self.out / "bonds"]
+        # Not --quiet: these runs take minutes each, and compare shows them finishing (a bar
+        # on a terminal, one line per run in a log).
+        if coarse:
+            argv.append("--coarse")
+        self.run(*argv)
+        rows = json.loads((self.out / "bonds" / "compare.json").read_text())["rows"]
+        shown = Path(model).resolve()
+        shown = shown.relative_to(REPO) if shown.is_relative_to(REPO) else shown
+        scale = "the coarse preset (4 mm grains)" if coarse else "the study's scale (2 mm grains)"
+        summary = []
+        for test, observable, number, csv_name, meas_col, sim_col, band in BOND_TABLES:
+            study = read_csv(DATA / csv_name)
+            self.h(f"Table {number}: {'peak shear force' if test == 'direct_shear' else 'unconfined compressive strength'}"
+                   ", the study's simulation and tilth's")
+            if test == "direct_shear":
+                self.p(f"`tilth compare` with `{shown}`, {replicates} specimens (seeds) per "
+                       f"condition, at {scale}; the study's error band is {band} % (its worst "
+                       "row). Mean +- sd between specimens; s.e. = sd / sqrt(specimens).")
+                self.p()
+            unit = "N" if test == "direct_shear" else "kPa"
+            self.p(f"| moisture | firmness MPa | measured {unit} | study simulated (error) | "
+                   f"tilth mean +- sd | s.e. | tilth error | within {band} % |")
+            self.p("|---|---|---|---|---|---|---|---|")
+            errors, study_errors, inside = [], [], 0
+            for s in study:
+                m, f = float(s["moisture_pct"]), float(s["firmness_mpa"])
+                r = next((r for r in rows if r["test"] == test and r["observable"] == observable
+                          and abs(r["conditions"]["moisture_pct"] - m) < 1e-9
+                          and abs(r["conditions"]["firmness_mpa"] - f) < 1e-9), None)
+                meas, s_sim = float(s[meas_col]), float(s[sim_col])
+                s_err = 100 * (s_sim - meas) / meas
+                study_errors.append(abs(s_err))
+                if r is None:
+                    self.p(f"| {m:g} % | {f:g} | {meas:.2f} | {s_sim:.2f} ({s_err:+.2f} %) | "
+                           "not in the measurements | | | |")
+                    continue
+                sims = [v for v in r["simulated"] if v is not None]
+                sd = r.get("simulated_scatter")
+                se = sd / math.sqrt(len(sims)) if sd is not None and sims else None
+                err = 100 * r["relative_error"] if r["relative_error"] is not None else None
+                ok = err is not None and abs(err) <= band
+                if err is not None:
+                    errors.append(abs(err))
+                inside += ok
+                self.p(f"| {m:g} % | {f:g} | {meas:.2f} | {s_sim:.2f} ({s_err:+.2f} %) | "
+                       f"{fmt(r['simulated_mean'])} +- {fmt(sd)} | {fmt(se)} | "
+                       f"{'-' if err is None else f'{err:+.2f} %'} | {'yes' if ok else 'no'} |")
+            self.p()
+            mae = sum(errors) / len(errors) if errors else float("nan")
+            s_mae = sum(study_errors) / len(study_errors)
+            line = (f"{inside} of {len(study)} rows within {band} %; mean absolute error "
+                    f"tilth {mae:.2f} %, the study {s_mae:.2f} %.")
+            self.p(line)
+            summary.append(line)
+        return summary
+
     def write(self):
         head = ["# The reference study as a tilth pipeline: its tables beside tilth's own runs",
                 "",
@@ -347,14 +430,33 @@ def main():
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--replicates", type=int, default=10,
                     help="seeds per moisture in the validation runs")
+    ap.add_argument("--bonds", default=str(REPO / "docs" / "li2022-statistics" / "per-test-bonds.toml"),
+                    help="model file with calibrated bond strengths for tables 12 and 13")
+    ap.add_argument("--bond-replicates", type=int, default=3,
+                    help="specimens (seeds) per condition of tables 12 and 13")
+    ap.add_argument("--stages", default=",".join(STAGES),
+                    help="comma-separated, of: " + ", ".join(STAGES) + " (default: both)")
     ap.add_argument("--tilth", default=shutil.which("tilth") or "tilth")
     args = ap.parse_args()
+    stages = [t.strip() for t in args.stages.split(",") if t.strip()]
+    unknown = [t for t in stages if t not in STAGES]
+    if unknown or not stages:
+        ap.error(f"--stages: `{','.join(unknown) or args.stages}` is unknown: allowed "
+                 + ", ".join(STAGES))
+    for name in ("replicates", "bond_replicates", "cores"):
+        if getattr(args, name) < 1:
+            ap.error(f"--{name.replace('_', '-')}: {getattr(args, name)} is out of range: at least 1")
+    if "bonds" in stages and not Path(args.bonds).is_file():
+        ap.error(f"--bonds: {args.bonds} is not a file")
     pipe = Pipeline(args)
-    pipe.screening()
-    nxt = pipe.steepest_ascent()
-    pipe.box_behnken(nxt)
-    chosen = pipe.solve(nxt)
-    pipe.validate(chosen)
+    if "repose" in stages:
+        pipe.screening()
+        nxt = pipe.steepest_ascent()
+        pipe.box_behnken(nxt)
+        chosen = pipe.solve(nxt)
+        pipe.validate(chosen)
+    if "bonds" in stages:
+        pipe.bonds(args.bonds, args.bond_replicates)
     pipe.write()
 
 
