@@ -25,7 +25,7 @@
 
 use super::calibrate_report;
 use super::compare::{
-    Measurement, condition_factors, experiment_text, factor, mean_sd, read_measurements,
+    Measurement, SetArgs, condition_factors, experiment_text, factor, mean_sd, read_measurements,
     run_generated,
 };
 use crate::lab::model::{At, Model, evaluate_at};
@@ -86,6 +86,8 @@ pub struct CalibrateArgs {
     /// The test's coarse preset (bigger particles, less material).
     #[arg(long)]
     pub coarse: bool,
+    #[command(flatten)]
+    pub set: SetArgs,
     /// Only measurements whose condition is one of these, e.g. `moisture_pct=6`.
     #[arg(long = "where")]
     pub filters: Vec<String>,
@@ -196,6 +198,7 @@ pub struct Iteration {
 }
 
 pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
+    let set = args.set.parse()?;
     if args.joint && args.per_test {
         bail!(
             "--per-test gives one test its own values; --joint shares one value across tests: choose one"
@@ -222,7 +225,7 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     let rows = select_rows(args, &model, &[args.test.as_str()])?;
     let stop = execute::stop_on_signals()?;
     let factors = run_factors(&args.test, &params);
-    let text = experiment_text(&args.test, &model_path, args.coarse);
+    let text = experiment_text(&args.test, &model_path, args.coarse, &set);
     let real = |p: &Param, z: f64| 0.5 * (p.low + p.high) + z * 0.5 * (p.high - p.low);
     let conds_of = |m: &Measurement| cond_values(&args.test, m, &args.data);
 
@@ -516,6 +519,7 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         "test": args.test,
         "model": args.model,
         "coarse": args.coarse,
+        "set": args.set.set,
         "seeds": args.seeds,
         "check_seeds": args.check_seeds.unwrap_or(args.seeds),
         "tolerance_pct": args.tolerance,

@@ -75,6 +75,7 @@ pub struct JointIteration {
 }
 
 pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
+    let set = args.set.parse()?;
     let tests: Vec<&str> = args.test.split(',').map(str::trim).collect();
     if let Some(t) = tests.iter().find(|t| !TESTS.contains(t)) {
         bail!(
@@ -135,7 +136,7 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         }
         let plan = Plan::generated(
             &format!("{test}-surface"),
-            experiment_text(test, &model_path, args.coarse),
+            experiment_text(test, &model_path, args.coarse, &set),
             Path::new("."),
             run_factors(test, &params),
             runs,
@@ -227,7 +228,7 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             }
             let plan = Plan::generated(
                 &format!("{test}-check-{it}"),
-                experiment_text(test, &model_path, args.coarse),
+                experiment_text(test, &model_path, args.coarse, &set),
                 Path::new("."),
                 run_factors(test, &params),
                 runs,
@@ -378,6 +379,7 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         "tests": tests,
         "model": args.model,
         "coarse": args.coarse,
+        "set": args.set.set,
         "seeds": args.seeds,
         "check_seeds": n_check,
         "tolerance_pct": args.tolerance,

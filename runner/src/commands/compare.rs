@@ -42,6 +42,8 @@ pub struct CompareArgs {
     /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
     #[arg(long)]
     pub coarse: bool,
+    #[command(flatten)]
+    pub set: SetArgs,
     /// Only these tests (comma-separated: repose, direct_shear, ucs).
     #[arg(long, value_delimiter = ',')]
     pub tests: Vec<String>,
@@ -78,18 +80,95 @@ pub struct Compared {
     pub problems: Vec<String>,
 }
 
-pub fn experiment_text(test: &str, model: &Path, coarse: bool) -> String {
+pub fn experiment_text(test: &str, model: &Path, coarse: bool, set: &[TestSetting]) -> String {
     // The test's own table is written (empty: defaults) so that factors can set its keys.
-    format!(
+    let mut text = format!(
         "format_version = 1\nexperiment = \"{test}\"\nmodel = {:?}\ncoarse = {coarse}\n[conditions]\n[{test}]\n",
         model.display().to_string()
-    )
+    );
+    for s in set.iter().filter(|s| s.test == test) {
+        text.push_str(&format!("{} = {}\n", s.key, s.value));
+    }
+    text
+}
+
+/// The lab tests a command can run.
+const TESTS: [&str; 3] = ["repose", "direct_shear", "ucs"];
+
+/// `--set TEST.KEY=VALUE`, for the commands that run the lab tests: one key of a test's own
+/// table (`[repose]`, `[direct_shear]` or `[ucs]` of an experiment file) in every run of
+/// that test, over the preset: another instrument (`repose.tray_diameter=0.1236`), another
+/// amount of soil (`repose.mass_g=300`).
+#[derive(Debug, Clone, Default, Args)]
+pub struct SetArgs {
+    /// A key of a test's table in every run of that test, e.g. repose.mass_g=300 (the keys
+    /// of sweeps/experiments/*.toml, with their ranges); repeatable.
+    #[arg(long = "set", value_name = "TEST.KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// One `--set`, checked: a known test, a bare key, a TOML value. Whether the test has the key
+/// and the value is in its range is checked when the runs are planned, before any runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TestSetting {
+    pub test: String,
+    pub key: String,
+    pub value: toml::Value,
+}
+
+impl SetArgs {
+    pub fn parse(&self) -> Result<Vec<TestSetting>> {
+        let mut out: Vec<TestSetting> = vec![];
+        for raw in &self.set {
+            let example = "expected TEST.KEY=VALUE, e.g. repose.mass_g=300";
+            let (path, value) = raw
+                .split_once('=')
+                .ok_or_else(|| anyhow!("--set {raw}: {example}"))?;
+            let (test, key) = path
+                .trim()
+                .split_once('.')
+                .ok_or_else(|| anyhow!("--set {raw}: {example}"))?;
+            if !TESTS.contains(&test) {
+                bail!(
+                    "--set {raw}: `{test}` is not a test: allowed {}",
+                    TESTS.join(", ")
+                );
+            }
+            let bare = |k: &str| {
+                !k.is_empty()
+                    && k.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+            };
+            if !bare(key) {
+                bail!("--set {raw}: `{key}` is not a key of [{test}] (letters, digits, _ and -)");
+            }
+            let value = toml::from_str::<toml::Table>(&format!("v = {}", value.trim()))
+                .ok()
+                .and_then(|mut t| t.remove("v"))
+                .ok_or_else(|| {
+                    anyhow!(
+                        "--set {raw}: `{}` is not a value (a number, true or false, or a quoted string)",
+                        value.trim()
+                    )
+                })?;
+            if out.iter().any(|s| s.test == test && s.key == key) {
+                bail!("--set {raw}: {test}.{key} is set twice");
+            }
+            out.push(TestSetting {
+                test: test.to_string(),
+                key: key.to_string(),
+                value,
+            });
+        }
+        Ok(out)
+    }
 }
 
 pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     if args.replicates == 0 {
         bail!("--replicates 0 is out of range: allowed 1 or more");
     }
+    let set = args.set.parse()?;
     let model = std::path::absolute(&args.model)?;
     if !model.exists() {
         bail!("{}: no such model file", args.model.display());
@@ -102,12 +181,8 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             tests.push(m.test.clone());
         }
     }
-    if let Some(t) = args
-        .tests
-        .iter()
-        .find(|t| !["repose", "direct_shear", "ucs"].contains(&t.as_str()))
-    {
-        bail!("--tests: `{t}` is unknown: allowed repose, direct_shear, ucs");
+    if let Some(t) = args.tests.iter().find(|t| !TESTS.contains(&t.as_str())) {
+        bail!("--tests: `{t}` is unknown: allowed {}", TESTS.join(", "));
     }
     let stop = execute::stop_on_signals()?;
     let rows: Vec<Measurement> = rows
@@ -123,6 +198,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             replicates: args.replicates,
             first_seed: 1,
             coarse: args.coarse,
+            set: &set,
             cores: args.cores,
             quiet: args.quiet,
             cache: args.cache.as_deref(),
@@ -156,6 +232,8 @@ pub struct Simulate<'a> {
     /// tilth (a hash of its executable), so that any command that needs the same runs, or
     /// more replicates of them, finds them done (`--cache`).
     pub cache: Option<&'a Path>,
+    /// `--set`: keys of the tests' own tables in every run.
+    pub set: &'a [TestSetting],
 }
 
 /// Simulates every row (its test at its conditions, `replicates` seeds), reusing finished
@@ -176,6 +254,12 @@ pub fn simulate(
         if !tests.contains(&m.test.as_str()) {
             tests.push(&m.test);
         }
+    }
+    for unused in how.set.iter().filter(|s| !tests.contains(&s.test.as_str())) {
+        eprintln!(
+            "warning: --set {}.{}: no {} rows here, so it is not used (nor checked)",
+            unused.test, unused.key, unused.test
+        );
     }
     // Rows of one test at the same conditions (a repose run's angle, tray mass and flow
     // rate) share their runs: `group[i]` is row i's set of runs, numbered per test.
@@ -222,7 +306,7 @@ pub fn simulate(
                 });
             }
         }
-        let text = experiment_text(test, &model, how.coarse);
+        let text = experiment_text(test, &model, how.coarse, how.set);
         let mut plan = Plan::generated(test, text, Path::new("."), factors, runs)
             .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
         // The sweep's identity leaves out how many replicates it has (each run is still
@@ -494,6 +578,7 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
         "coarse": args.coarse,
+        "set": args.set.set,
         "replicates": args.replicates,
         "rows": rows,
         "observables": summary,

@@ -13,7 +13,7 @@
 //! `DIR/diagnosis.md`, the ranking in words.
 
 use super::calibrate::{Param, parse_param};
-use super::compare::{Simulate, mean_sd, simulate, std_error};
+use super::compare::{SetArgs, Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use super::model_edit::{add_to, switch_on, values_of, variant};
 use crate::lab::model::Model;
@@ -55,6 +55,8 @@ pub struct DiagnoseArgs {
     pub tests: Vec<String>,
     #[arg(long)]
     pub coarse: bool,
+    #[command(flatten)]
+    pub set: SetArgs,
     #[arg(long)]
     pub cores: Option<usize>,
     #[arg(long)]
@@ -97,6 +99,7 @@ pub struct Diagnosed {
 }
 
 pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
+    let set = args.set.parse()?;
     if args.replicates < 2 {
         bail!(
             "--replicates {} is out of range: allowed 2 or more (the noise of every finite difference is estimated from the replicates; without it any candidate could look significant)",
@@ -213,6 +216,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                     1 + args.replicates as u64
                 },
                 coarse: args.coarse,
+                set: &set,
                 cores: args.cores,
                 quiet: args.quiet,
                 cache: args.cache.as_deref(),
@@ -371,6 +375,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "data": args.data.display().to_string(),
         "replicates": args.replicates,
         "coarse": args.coarse,
+        "set": args.set.set,
         "alpha": args.alpha,
         "free_parameters": params,
         "rows_used": m,

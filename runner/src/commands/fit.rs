@@ -31,7 +31,7 @@
 //! `DIR/fit.md`, and `DIR/model.toml`: the model with the fitted parameters, ready for
 //! `tilth compare`. Runs go to `DIR/runs/iter-K/<variant>/` and resume.
 
-use super::compare::{Simulate, mean_sd, simulate, std_error};
+use super::compare::{SetArgs, Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use super::model_edit::{add_to, switch_on, values_of, variant};
 use crate::lab::model::Model;
@@ -70,6 +70,8 @@ pub struct FitArgs {
     pub out: PathBuf,
     #[arg(long)]
     pub coarse: bool,
+    #[command(flatten)]
+    pub set: SetArgs,
     #[arg(long)]
     pub cores: Option<usize>,
     #[arg(long)]
@@ -199,6 +201,7 @@ pub struct Step {
 type Sims = (Vec<Option<f64>>, Vec<Option<f64>>);
 
 pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
+    let set = args.set.parse()?;
     if args.replicates < 2 {
         bail!(
             "--replicates {}: allowed 2 or more (the rows' standard errors need the runs' scatter)",
@@ -242,6 +245,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 replicates: args.replicates,
                 first_seed: 1,
                 coarse: args.coarse,
+                set: &set,
                 cores: args.cores,
                 quiet: args.quiet,
                 cache: args.cache.as_deref(),
@@ -439,6 +443,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         "data": args.data.display().to_string(),
         "replicates": args.replicates,
         "coarse": args.coarse,
+        "set": args.set.set,
         "parameters": params,
         "estimate": b_theta,
         "standard_error": sd,

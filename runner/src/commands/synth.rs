@@ -17,7 +17,7 @@
 //! so the same S gives the same file. The runs are kept next to the output
 //! (`D.runs/<test>/`, resumable) unless `--work` says where.
 
-use super::compare::{Simulate, mean_sd, simulate};
+use super::compare::{SetArgs, Simulate, mean_sd, simulate};
 use super::measurements::{
     CONDITIONS, Measurement, check_against_model, open_csv, rows_of, write_measurements,
 };
@@ -67,6 +67,8 @@ pub struct SynthArgs {
     /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
     #[arg(long)]
     pub coarse: bool,
+    #[command(flatten)]
+    pub set: SetArgs,
     /// Cores to use (default: all this process may use).
     #[arg(long)]
     pub cores: Option<usize>,
@@ -208,6 +210,7 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
 }
 
 pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
+    let set = args.set.parse()?;
     let mut truth = std::path::absolute(&args.truth)?;
     let mut model = Model::load(&truth)?;
     if !args.with.is_empty() {
@@ -255,6 +258,7 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
             replicates: args.replicates,
             first_seed,
             coarse: args.coarse,
+            set: &set,
             cores: args.cores,
             quiet: args.quiet,
             cache: args.cache.as_deref(),

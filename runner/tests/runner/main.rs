@@ -12,6 +12,7 @@ mod external;
 mod fit;
 mod measurements;
 mod rsm;
+mod settings;
 mod sweeps;
 
 use std::path::{Path, PathBuf};
