@@ -198,7 +198,6 @@ pub struct Iteration {
 }
 
 pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
-    let set = args.set.parse()?;
     if args.joint && args.per_test {
         bail!(
             "--per-test gives one test its own values; --joint shares one value across tests: choose one"
@@ -221,6 +220,7 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     check_counts(args)?;
+    let set = args.set.parse()?;
     let (params, model_path, model) = load_params(args)?;
     let rows = select_rows(args, &model, &[args.test.as_str()])?;
     let stop = execute::stop_on_signals()?;

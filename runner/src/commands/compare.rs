@@ -8,8 +8,8 @@
 //! reuses what is done), one sweep per test in `DIR/<test>/`. Writes `DIR/compare.json`,
 //! `compare.csv` and `compare.md`.
 
-use super::measurements::check_against_model;
 pub use super::measurements::{Measurement, read_measurements};
+use super::measurements::{TESTS, check_against_model};
 use crate::lab::model::Model;
 use crate::sweep::execute::{self, Options};
 use crate::sweep::job::{RunSummary, Status, read_summary, run_dir, write_atomic};
@@ -91,9 +91,6 @@ pub fn experiment_text(test: &str, model: &Path, coarse: bool, set: &[TestSettin
     }
     text
 }
-
-/// The lab tests a command can run.
-const TESTS: [&str; 3] = ["repose", "direct_shear", "ucs"];
 
 /// `--set TEST.KEY=VALUE`, for the commands that run the lab tests: one key of a test's own
 /// table (`[repose]`, `[direct_shear]` or `[ucs]` of an experiment file) in every run of

@@ -2,7 +2,8 @@
 //! of that test (a user's own instrument or amount of soil), and a bad one is refused, with
 //! the key and what is allowed, before any run.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 use crate::tilth_in_root as tilth;
 
@@ -19,11 +20,9 @@ fn setup(name: &str) -> (PathBuf, PathBuf) {
     (dir, data)
 }
 
-#[test]
-fn a_set_key_reaches_every_run_of_its_test() {
-    let (dir, data) = setup("set-reaches-runs");
-    let out = dir.join("out");
-    let o = tilth(&[
+/// `tilth compare` of the data at the coarse preset into `out`, with `--set` for each of `sets`.
+fn compare(data: &Path, out: &Path, sets: &[&str]) -> Output {
+    let mut args = vec![
         "compare",
         "--model",
         "models/li2022.toml",
@@ -33,11 +32,18 @@ fn a_set_key_reaches_every_run_of_its_test() {
         out.to_str().unwrap(),
         "--coarse",
         "--quiet",
-        "--set",
-        "repose.mass_g=20",
-        "--set",
-        "ucs.height=0.05",
-    ]);
+    ];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    tilth(&args)
+}
+
+#[test]
+fn a_set_key_reaches_every_run_of_its_test() {
+    let (dir, data) = setup("set-reaches-runs");
+    let out = dir.join("out");
+    let o = compare(&data, &out, &["repose.mass_g=20", "ucs.height=0.05"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(
@@ -92,19 +98,7 @@ fn a_bad_set_is_refused_before_any_run() {
     ];
     for (k, (set, words)) in cases.iter().enumerate() {
         let out = dir.join(format!("out-{k}"));
-        let o = tilth(&[
-            "compare",
-            "--model",
-            "models/li2022.toml",
-            "--data",
-            data.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--coarse",
-            "--quiet",
-            "--set",
-            set,
-        ]);
+        let o = compare(&data, &out, &[set]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "--set {set} was taken");
         for w in *words {
