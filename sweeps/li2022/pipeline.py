@@ -58,6 +58,11 @@ def read_csv(path):
         return list(csv.DictReader(f))
 
 
+def at_coarse_preset():
+    """Whether the designs run at the coarse preset (pb.toml's `[fixed]`): every stage follows."""
+    return '"coarse" = true' in (HERE / "pb.toml").read_text()
+
+
 def measured_angles():
     return {int(r["moisture_pct"]): float(r["repose_angle_deg"])
             for r in read_csv(DATA / "table01_friction_repose.csv")}
@@ -281,7 +286,7 @@ class Pipeline:
         done = (path.exists() and path.read_text() == model
                 and (self.out / "validation" / "compare.json").exists())
         path.write_text(model)
-        coarse = "--coarse" if '"coarse" = true' in (HERE / "pb.toml").read_text() else None
+        coarse = "--coarse" if at_coarse_preset() else None
         argv = ["compare", "--model", path, "--data", REPO / "data" / "li2022" / "measurements.csv",
                 "--tests", "repose", "--replicates", self.replicates, "--cores", self.cores,
                 "--out", self.out / "validation", "--quiet"]
@@ -324,7 +329,7 @@ class Pipeline:
         `tilth compare`; docs/li2022-statistics.md). This stage re-runs every specimen with
         fresh runs of this build and puts the result beside the study's tables.
         """
-        coarse = '"coarse" = true' in (HERE / "pb.toml").read_text()
+        coarse = at_coarse_preset()
         argv = ["compare", "--model", model, "--data", REPO / "data" / "li2022" / "measurements.csv",
                 "--tests", "direct_shear,ucs", "--replicates", replicates,
                 "--cores", self.cores, "--out", self.out / "bonds"]
