@@ -2,7 +2,9 @@
 """The reference study (Li et al. 2022) as one pipeline, with tilth's own simulations.
 
     sweeps/li2022/pipeline.py OUT [--cores N] [--replicates N] [--bonds MODEL]
-                              [--bond-replicates N] [--stages STAGE,...] [--tilth PATH]
+                              [--bond-replicates N] [--repose-model MODEL]
+                              [--surface-seeds N] [--check-seeds N]
+                              [--stages STAGE,...] [--tilth PATH]
 
 Plackett-Burman screening (pb.toml, table 6) -> its ANOVA beside the study's (table 7) ->
 the steepest-ascent path (steepest_ascent.toml, table 8) -> the next design's ranges from the
@@ -11,8 +13,11 @@ path's best run (`tilth rsm next`, as the study chose table 9's levels) -> Box-B
 equations 10-13) and the angle's own fit solved for each moisture's measured angle (the
 ridge) -> one setting per moisture (restitution at the study's 0.45, the ridge point nearest
 the design centre) -> validation runs of the funnel test at each moisture with several seeds
-(`tilth compare`) against table 1, beside the study's own validation (table 11) -> the
-bonded specimens: the direct shear box and the unconfined compression test at every
+(`tilth compare`) against table 1, beside the study's own validation (table 11) -> the angle
+calibrated again where it can be held to 2 % (stage `repose-calibration`): `tilth calibrate`
+per moisture on a funnel heap that scatters by 1-1.5 degrees between seeds instead of 5-7
+(QUIET_FUNNEL), with seeds repeated at every setting, then fresh seeds through
+`tilth compare` as the verdict -> the bonded specimens: the direct shear box and the unconfined compression test at every
 condition of tables 12 and 13, with the bond strengths of a calibrated model file (`--bonds`,
 by default docs/li2022-statistics/per-test-bonds.toml, whose calibration that document
 describes), against the measurements and beside the study's own simulated values.
@@ -42,7 +47,22 @@ MOISTURES = [3, 6, 9, 12]
 FACTORS7 = ["x1", "x2", "x3", "x4", "x5", "x6", "x7"]
 PATH_FACTORS = ["x4", "x6", "x7"]
 STUDY_RESTITUTION = 0.45  # table 11: the study fixed x4 at 0.45 for every moisture
-STAGES = ["repose", "bonds"]
+STAGES = ["repose", "repose-calibration", "bonds"]
+# The funnel heap tilth calibrates the angle on (docs/li2022-repose-calibration.md): the
+# study's tester scaled to the coarse preset's 4 mm grains, so that the heap is as many grains
+# across as the study's 2 mm heap was, poured at the study's mass flow. `tilth calibrate` and
+# `tilth compare` put these keys into every funnel run (`--set repose.KEY=VALUE`).
+QUIET_FUNNEL = [
+    ("tray_diameter", 0.1236),  # m: twice the study's 61.8 mm tray, for grains twice as big
+    ("drop_height", 0.12),      # m: the outlet twice as high above the tray
+    ("mass_g", 300),            # as much soil as the tray holds at 45 degrees, and some overflow
+    ("rate", 2500),             # grains/s: 116 g/s, the study's 20,000 grains/s of 2 mm
+    ("photographs", 8),         # silhouettes averaged per heap
+]
+# The free parameter, one value per moisture (the surface energy is fixed on a line in
+# moisture by the starting model: one angle per moisture cannot separate the two).
+REPOSE_PARAM = "soil-soil.rolling_friction=0.1:0.6"
+REPOSE_TOLERANCE = 2.0  # %: issue 5's target; the study's worst validation error was 4.72 %
 # The study's error bands (its worst errors, section "What the study calibrated" of
 # shared/docs/experiments.md): peak shear force 3.71-6.53 %, UCS 0.6-8.07 %.
 BOND_TABLES = [
@@ -320,7 +340,82 @@ class Pipeline:
         self.p()
         self.p(f"Worst error: tilth {worst:.2f} %, the study 4.72 % (its table 11 at 12 %).")
 
-    # 6. Bonds: tables 12 and 13 ----------------------------------------------------------
+    # 6. The angle calibrated on the quiet funnel heap ---------------------------------------
+    def calibrate_repose(self, model, surface_seeds, check_seeds):
+        """`tilth calibrate` per moisture on the quiet heap, then fresh seeds through compare.
+
+        The study's route above (one run per design point) cannot hold 2 % at the coarse scale:
+        its heaps scatter by 5-7 degrees between seeds. The quiet heap scatters by 1-1.5, and
+        `tilth calibrate` measures that scatter (`surface_seeds` per surface setting, then
+        direct checks of `check_seeds` seeds, seeds 1001 on, at the solved setting, refined by
+        Newton steps while the check misses). The calibrated model is then run once more by
+        `tilth compare` with `--replicates` seeds (1 on, not used by any check), whose mean is
+        the verdict: the calibration chose its setting by its own checks, so those do not
+        count as validation.
+        """
+        sets = []
+        for key, value in QUIET_FUNNEL:
+            sets += ["--set", f"repose.{key}={value}"]
+        cal = self.out / "repose-calibration"
+        measurements = REPO / "data" / "li2022" / "measurements.csv"
+        self.run("calibrate", "--model", model, "--data", measurements, "--test", "repose",
+                 "--param", REPOSE_PARAM, "--seeds", surface_seeds, "--check-seeds", check_seeds,
+                 "--refine", 2, "--coarse", *sets, "--out", cal, "--cores", self.cores)
+        calibration = json.loads((cal / "calibration.json").read_text())
+        self.run("compare", "--model", cal / "model.toml", "--data", measurements,
+                 "--tests", "repose", "--replicates", self.replicates, "--coarse", *sets,
+                 "--cores", self.cores, "--out", self.out / "repose-validation")
+        rows = json.loads((self.out / "repose-validation" / "compare.json").read_text())["rows"]
+        study = {int(r["moisture_pct"]): r for r in read_csv(DATA / "table11_calibrated_contact.csv")}
+        shown = Path(model).resolve()
+        shown = shown.relative_to(REPO) if shown.is_relative_to(REPO) else shown
+        self.h("The angle calibrated on the quiet funnel heap")
+        self.p(f"`tilth calibrate` from `{shown}`, the free parameter `{REPOSE_PARAM}` per "
+               f"moisture, {surface_seeds} seeds per surface setting and {check_seeds} per direct "
+               f"check; then `tilth compare` with the calibrated model and {self.replicates} fresh "
+               "seeds per moisture. The funnel: "
+               + ", ".join(f"{k} = {v}" for k, v in QUIET_FUNNEL) + " at the coarse preset. "
+               "Mean +- sd between seeds; s.e. = sd / sqrt(seeds).")
+        self.p()
+        self.p("| moisture | measured | study simulated (error) | calibrated rolling friction (95 % posterior) "
+               "| check: mean +- sd (seeds) | validation: mean +- sd | s.e. | validation error "
+               f"| within {REPOSE_TOLERANCE:g} % |")
+        self.p("|---|---|---|---|---|---|---|---|---|")
+        errors, inside = [], 0
+        for m in MOISTURES:
+            s_sim = float(study[m]["simulated_repose_angle_deg"])
+            c = next((c for c in calibration["conditions"]
+                      if abs(c["conditions"].get("moisture_pct", -1) - m) < 1e-9), None)
+            r = next((r for r in rows if abs(r["conditions"]["moisture_pct"] - m) < 1e-9), None)
+            if c is None or r is None:
+                self.p(f"| {m} % | | {s_sim:.2f} | not calibrated | | | | | no |")
+                continue
+            meas = r["value"]
+            s_err = 100 * (s_sim - meas) / meas
+            post = c["posterior"]
+            check = c["iterations"][-1] if c["iterations"] else None
+            check_text = (f"{check['mean']:.2f} +- {fmt(check['sd'])} ({len(check['values'])})"
+                          if check else "-")
+            sims = [v for v in r["simulated"] if v is not None]
+            sd = r.get("simulated_scatter")
+            se = sd / math.sqrt(len(sims)) if sd is not None and sims else None
+            err = 100 * r["relative_error"] if r["relative_error"] is not None else None
+            ok = err is not None and abs(err) <= REPOSE_TOLERANCE
+            if err is not None:
+                errors.append(abs(err))
+            inside += ok
+            self.p(f"| {m} % | {meas:.2f} | {s_sim:.2f} ({s_err:+.2f} %) | "
+                   f"{c['calibrated'][0]:.3f} ({post['q025'][0]:.3f}-{post['q975'][0]:.3f}) | "
+                   f"{check_text} | {fmt(r['simulated_mean'])} +- {fmt(sd)} | {fmt(se)} | "
+                   f"{'-' if err is None else f'{err:+.2f} %'} | {'yes' if ok else 'no'} |")
+        self.p()
+        worst = max(errors) if errors else float("nan")
+        line = (f"{inside} of {len(MOISTURES)} moistures within {REPOSE_TOLERANCE:g} % on fresh "
+                f"seeds; worst error tilth {worst:.2f} %, the study 4.72 % (its table 11 at 12 %).")
+        self.p(line)
+        return line
+
+    # 7. Bonds: tables 12 and 13 ----------------------------------------------------------
     def bonds(self, model, replicates):
         """The shear box and the UCS test at every condition of tables 12 and 13.
 
@@ -441,6 +536,13 @@ def main():
                     help="specimens (seeds) per condition of tables 12 and 13")
     ap.add_argument("--stages", default=",".join(STAGES),
                     help="comma-separated, of: " + ", ".join(STAGES) + " (default: both)")
+    ap.add_argument("--repose-model",
+                    default=str(REPO / "docs" / "li2022-repose-calibration" / "model.toml"),
+                    help="starting model of the repose-calibration stage")
+    ap.add_argument("--surface-seeds", type=int, default=2,
+                    help="seeds per surface setting in the repose-calibration stage")
+    ap.add_argument("--check-seeds", type=int, default=10,
+                    help="seeds per direct check in the repose-calibration stage")
     ap.add_argument("--tilth", default=shutil.which("tilth") or "tilth")
     args = ap.parse_args()
     stages = [t.strip() for t in args.stages.split(",") if t.strip()]
@@ -448,11 +550,13 @@ def main():
     if unknown or not stages:
         ap.error(f"--stages: `{','.join(unknown) or args.stages}` is unknown: allowed "
                  + ", ".join(STAGES))
-    for name in ("replicates", "bond_replicates", "cores"):
+    for name in ("replicates", "bond_replicates", "surface_seeds", "check_seeds", "cores"):
         if getattr(args, name) < 1:
             ap.error(f"--{name.replace('_', '-')}: {getattr(args, name)} is out of range: at least 1")
     if "bonds" in stages and not Path(args.bonds).is_file():
         ap.error(f"--bonds: {args.bonds} is not a file")
+    if "repose-calibration" in stages and not Path(args.repose_model).is_file():
+        ap.error(f"--repose-model: {args.repose_model} is not a file")
     pipe = Pipeline(args)
     if "repose" in stages:
         pipe.screening()
@@ -460,6 +564,8 @@ def main():
         pipe.box_behnken(nxt)
         chosen = pipe.solve(nxt)
         pipe.validate(chosen)
+    if "repose-calibration" in stages:
+        pipe.calibrate_repose(args.repose_model, args.surface_seeds, args.check_seeds)
     if "bonds" in stages:
         pipe.bonds(args.bonds, args.bond_replicates)
     pipe.write()

@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""Tests for the bond stage of sweeps/li2022/pipeline.py (tables 12 and 13).
+"""Tests for the bond and repose-calibration stages of sweeps/li2022/pipeline.py.
 
     python3 -m unittest discover -s tools/python -p 'test_*.py' -v
 
-The stage runs `tilth compare` and sets its rows beside the study's tables. Here `tilth` is
-replaced by a stand-in that writes a compare.json with known errors, so that the table's
+The stages run `tilth calibrate` and `tilth compare` and set their rows beside the study's
+tables. Here `tilth` is replaced by a stand-in that writes a calibration.json and a
+compare.json with known errors, so that the table's
 matching of rows, its errors, its band verdicts and its summaries are checked against
 numbers made up for the test and against the errors the study itself printed.
 """
@@ -147,6 +148,125 @@ class BondStage(unittest.TestCase):
         got13 = float(re.search(r"the study ([0-9.]+) %", self.summary[1]).group(1))
         self.assertAlmostEqual(got12, study12, delta=0.01)
         self.assertAlmostEqual(got13, study13, delta=0.01)
+
+
+# The repose-calibration stage: made-up validation errors per moisture (one outside 2 %)
+# and made-up calibrated rolling frictions.
+ANGLE_ERRORS = {3: 0.012, 6: -0.004, 9: 0.031, 12: -0.015}
+ROLLING = {3: 0.21, 6: 0.27, 9: 0.33, 12: 0.48}
+
+
+def measured_angles():
+    return {int(r["moisture_pct"]): float(r["repose_angle_deg"])
+            for r in rows_of("table01_friction_repose.csv")}
+
+
+def fake_calibration(out: Path):
+    conditions = []
+    for m, rf in ROLLING.items():
+        meas = measured_angles()[m]
+        conditions.append({
+            "conditions": {"moisture_pct": float(m)}, "measured": meas, "calibrated": [rf],
+            "iterations": [{"setting": [rf], "values": [meas] * 10, "mean": meas + 0.1,
+                            "sd": 1.25, "error_pct": 0.0}],
+            "posterior": {"q025": [rf - 0.05], "q975": [rf + 0.05]},
+        })
+    (out / "repose-calibration").mkdir(parents=True, exist_ok=True)
+    (out / "repose-calibration" / "calibration.json").write_text(
+        json.dumps({"conditions": list(reversed(conditions))}))
+
+
+def fake_angle_compare(out: Path, seeds: int):
+    rows = []
+    for m, e in ANGLE_ERRORS.items():
+        meas = measured_angles()[m]
+        mean = meas * (1 + e)
+        rows.append({"test": "repose", "observable": "repose_angle_deg", "value": meas,
+                     "conditions": {"moisture_pct": float(m)},
+                     "simulated": [mean - 1.0, mean + 1.0] * (seeds // 2),
+                     "simulated_mean": mean, "simulated_scatter": 1.0,
+                     "relative_error": e})
+    (out / "repose-validation").mkdir(parents=True, exist_ok=True)
+    (out / "repose-validation" / "compare.json").write_text(json.dumps({"rows": rows}))
+
+
+class ReposeCalibrationStage(unittest.TestCase):
+    def setUp(self):
+        self.pipeline = load_pipeline()
+        self.tmp = tempfile.TemporaryDirectory()
+        self.out = Path(self.tmp.name)
+        args = type("Args", (), {"out": str(self.out), "tilth": "tilth", "cores": 2,
+                                 "replicates": 8})()
+        self.pipe = self.pipeline.Pipeline(args)
+        self.calls = []
+
+        def run(*argv, capture=None):
+            argv = [str(a) for a in argv]
+            self.calls.append(argv)
+            if argv[0] == "calibrate":
+                fake_calibration(self.out)
+            else:
+                fake_angle_compare(self.out, 8)
+            return ""
+
+        self.pipe.run = run
+        self.line = self.pipe.calibrate_repose(REPO / "docs" / "li2022-repose-calibration" / "model.toml", 2, 10)
+        self.report = "\n".join(self.pipe.report)
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def rows(self):
+        part = self.report.split("## The angle calibrated on the quiet funnel heap")[1]
+        out = {}
+        for line in part.splitlines():
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            if len(cells) == 9 and cells[0].endswith("%") and cells[0][0].isdigit():
+                out[int(cells[0].rstrip(" %"))] = cells
+        return out
+
+    def sets(self, argv):
+        return [argv[i + 1] for i, a in enumerate(argv) if a == "--set"]
+
+    def test_it_calibrates_then_validates_the_calibrated_model_on_the_same_funnel(self):
+        self.assertEqual([c[0] for c in self.calls], ["calibrate", "compare"])
+        cal, cmp = self.calls
+        self.assertEqual(cal[cal.index("--test") + 1], "repose")
+        self.assertEqual(cal[cal.index("--param") + 1], self.pipeline.REPOSE_PARAM)
+        self.assertEqual(cal[cal.index("--seeds") + 1], "2")
+        self.assertEqual(cal[cal.index("--check-seeds") + 1], "10")
+        self.assertNotIn("--where", cal)  # every moisture of table 1
+        wanted = [f"repose.{k}={v}" for k, v in self.pipeline.QUIET_FUNNEL]
+        self.assertEqual(self.sets(cal), wanted)
+        self.assertEqual(self.sets(cmp), wanted)
+        for argv in (cal, cmp):
+            self.assertIn("--coarse", argv)
+        self.assertEqual(Path(cmp[cmp.index("--model") + 1]),
+                         self.out / "repose-calibration" / "model.toml")
+        self.assertEqual(cmp[cmp.index("--replicates") + 1], "8")
+
+    def test_every_moisture_gets_its_setting_its_validation_error_and_a_verdict(self):
+        rows = self.rows()
+        self.assertEqual(sorted(rows), [3, 6, 9, 12], self.report)
+        for m, cells in rows.items():
+            e = 100 * ANGLE_ERRORS[m]
+            self.assertTrue(cells[3].startswith(f"{ROLLING[m]:.3f} ("), cells)
+            self.assertEqual(cells[4], f"{measured_angles()[m] + 0.1:.2f} +- 1.25 (10)")
+            self.assertEqual(cells[6], f"{1 / 8 ** 0.5:.2f}")
+            self.assertEqual(cells[7], f"{e:+.2f} %")
+            self.assertEqual(cells[8], "yes" if abs(e) <= 2 else "no")
+
+    def test_the_study_column_reproduces_the_errors_of_its_table_11(self):
+        rows = self.rows()
+        # The study's validation errors (shared/docs/experiments.md): 0.7, 0.8, 0.7, 4.72 %.
+        printed = {m: float(re.search(r"\(([-+][0-9.]+) %\)", rows[m][2]).group(1)) for m in rows}
+        self.assertAlmostEqual(abs(printed[12]), 4.72, delta=0.01)
+        for m in (3, 6, 9):
+            self.assertLess(abs(printed[m]), 1.0)
+
+    def test_the_summary_counts_moistures_within_2_percent_and_names_the_worst(self):
+        self.assertTrue(self.line.startswith("3 of 4 moistures within 2 %"), self.line)
+        self.assertIn("worst error tilth 3.10 %", self.line)
 
 
 if __name__ == "__main__":
