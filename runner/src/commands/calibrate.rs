@@ -41,6 +41,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use tilth_tools::calibrate::{Linearised, Posterior, linearised, smc};
+use tilth_tools::rsm::plot::CheckRuns;
 use tilth_tools::rsm::{self, Anova, Data, FitOptions, Order, Table};
 
 #[derive(Debug, Args)]
@@ -478,6 +479,39 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
                 ),
             ),
         ];
+        // One free parameter: the fitted curve with its runs, the target, and every direct
+        // check (Design-Expert's one-factor plot, with the checks that decided).
+        let checks: Vec<CheckRuns> = iterations[c]
+            .iter()
+            .enumerate()
+            .map(|(k, it)| CheckRuns {
+                x: it.setting[0],
+                values: it.values.clone(),
+                label: format!(
+                    "check {}: {:.4} +- {:.4} over {} seeds",
+                    k + 1,
+                    it.mean,
+                    it.sd.unwrap_or(0.0),
+                    it.values.len()
+                ),
+            })
+            .collect();
+        if params.len() == 1
+            && let Some(svg) = tilth_tools::rsm::plot::response_curve_checked_svg(
+                &fit,
+                &[solution.clone()],
+                &[],
+                &checks,
+            )?
+        {
+            std::fs::write(
+                args.out.join(format!(
+                    "curve-{}.svg",
+                    super::rsm_plot::slug(&describe(&conds))
+                )),
+                svg,
+            )?;
+        }
         if let Some(svg) = tilth_tools::rsm::plot::contour_marked_svg(&fit, &solution, &[], &marks)?
         {
             std::fs::write(

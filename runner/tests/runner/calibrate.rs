@@ -162,6 +162,26 @@ fn calibrate_a_bond_stiffness_against_the_ucs() {
     assert_eq!(c["measured"], 259.13);
     // Three levels plus two centre points, one seed each.
     assert_eq!(c["surface_runs"], 5);
+    // One free parameter: the curve plot shows the fit's runs and every direct check, each
+    // check's runs as green points and labelled with their mean.
+    let curve = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.file_name().unwrap().to_string_lossy().starts_with("curve-"))
+        .expect("a curve-*.svg");
+    let svg = std::fs::read_to_string(&curve).unwrap();
+    let checks = c["iterations"].as_array().unwrap();
+    for (k, it) in checks.iter().enumerate() {
+        let label = format!("check {}: {:.4}", k + 1, it["mean"].as_f64().unwrap());
+        assert!(svg.contains(&label), "{label} not in {}", curve.display());
+    }
+    let check_runs: usize = checks
+        .iter()
+        .map(|it| it["values"].as_array().unwrap().len())
+        .sum();
+    // plus one in the legend
+    assert_eq!(svg.matches("fill=\"#2CA02C\"").count(), check_runs + 1, "{svg}");
+    assert!(svg.contains("runs (5)"), "the surface runs are drawn");
     // The starting value is the model's: table 3's stiffness at 6 %, 1.55 MPa.
     assert_eq!(c["start"][0], 1.07e8);
     let model: toml::Table = std::fs::read_to_string(dir.join("model.toml"))

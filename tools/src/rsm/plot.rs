@@ -218,6 +218,27 @@ pub fn response_curve_svg(
     solutions: &[Solution],
     fixed: &[(usize, f64)],
 ) -> Result<Option<String>, RsmError> {
+    response_curve_checked_svg(a, solutions, fixed, &[])
+}
+
+/// Direct runs at one setting of the free factor, outside the fit (a calibration's checks).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckRuns {
+    /// The free factor's value, real units.
+    pub x: f64,
+    /// The response of each run.
+    pub values: Vec<f64>,
+    pub label: String,
+}
+
+/// [`response_curve_svg`] with direct checks drawn over it: each run a green point, their
+/// mean with +- one standard deviation between runs as a bar.
+pub fn response_curve_checked_svg(
+    a: &Anova,
+    solutions: &[Solution],
+    fixed: &[(usize, f64)],
+    checks: &[CheckRuns],
+) -> Result<Option<String>, RsmError> {
     const WHAT: &str = "the response curve";
     let free: Vec<usize> = (0..a.factors.len())
         .filter(|i| !fixed.iter().any(|f| f.0 == *i))
@@ -256,12 +277,15 @@ pub fn response_curve_svg(
         .iter()
         .flat_map(|c| [c.1 - c.2, c.1 + c.2])
         .chain(runs.iter().map(|r| r.1))
+        .chain(checks.iter().flat_map(|c| c.values.iter().copied()))
         .chain(solutions.iter().map(|s| s.target));
     let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
         (l.min(v), h.max(v))
     });
     let pad = 0.06 * (hi - lo).max(1e-9);
-    let (xlo, xhi) = (x0.min(x1), x0.max(x1));
+    let (xlo, xhi) = checks.iter().fold((x0.min(x1), x0.max(x1)), |(l, h), c| {
+        (l.min(c.x), h.max(c.x))
+    });
     let fixed_text: Vec<String> = fixed
         .iter()
         .map(|(k, v)| format!("{} = {v}", a.factors[*k]))
@@ -317,6 +341,35 @@ pub fn response_curve_svg(
                 .map_err(err(WHAT))?
                 .label(format!("runs ({})", runs.len()))
                 .legend(|(x, y)| Circle::new((x + 10, y), 4, GREY.filled()));
+        }
+        const GREEN: RGBColor = PALETTE[2];
+        for c in checks.iter().filter(|c| !c.values.is_empty()) {
+            let n = c.values.len() as f64;
+            let mean = c.values.iter().sum::<f64>() / n;
+            let sd = if c.values.len() > 1 {
+                (c.values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+            } else {
+                0.0
+            };
+            chart
+                .draw_series(
+                    c.values
+                        .iter()
+                        .map(|v| Circle::new((c.x, *v), 3, GREEN.filled())),
+                )
+                .map_err(err(WHAT))?;
+            chart
+                .draw_series([ErrorBar::new_vertical(
+                    c.x,
+                    mean - sd,
+                    mean,
+                    mean + sd,
+                    BLACK.stroke_width(2),
+                    10,
+                )])
+                .map_err(err(WHAT))?
+                .label(c.label.as_str())
+                .legend(|(x, y)| Circle::new((x + 10, y), 3, GREEN.filled()));
         }
         for s in solutions {
             chart
