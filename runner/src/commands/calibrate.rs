@@ -496,14 +496,17 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
                 ),
             })
             .collect();
-        if params.len() == 1
-            && let Some(svg) = tilth_tools::rsm::plot::response_curve_checked_svg(
+        let curve = if params.len() == 1 {
+            tilth_tools::rsm::plot::response_curve_checked_svg(
                 &fit,
                 &[solution.clone()],
                 &[],
                 &checks,
             )?
-        {
+        } else {
+            None
+        };
+        if let Some(svg) = curve {
             std::fs::write(
                 args.out.join(format!(
                     "curve-{}.svg",

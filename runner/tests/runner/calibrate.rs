@@ -167,7 +167,12 @@ fn calibrate_a_bond_stiffness_against_the_ucs() {
     let curve = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .find(|p| p.file_name().unwrap().to_string_lossy().starts_with("curve-"))
+        .find(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("curve-")
+        })
         .expect("a curve-*.svg");
     let svg = std::fs::read_to_string(&curve).unwrap();
     let checks = c["iterations"].as_array().unwrap();
@@ -180,7 +185,11 @@ fn calibrate_a_bond_stiffness_against_the_ucs() {
         .map(|it| it["values"].as_array().unwrap().len())
         .sum();
     // plus one in the legend
-    assert_eq!(svg.matches("fill=\"#2CA02C\"").count(), check_runs + 1, "{svg}");
+    assert_eq!(
+        svg.matches("fill=\"#2CA02C\"").count(),
+        check_runs + 1,
+        "{svg}"
+    );
     assert!(svg.contains("runs (5)"), "the surface runs are drawn");
     // The starting value is the model's: table 3's stiffness at 6 %, 1.55 MPa.
     assert_eq!(c["start"][0], 1.07e8);
