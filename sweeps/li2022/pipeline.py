@@ -396,11 +396,7 @@ class Pipeline:
             check = c["iterations"][-1] if c["iterations"] else None
             check_text = (f"{check['mean']:.2f} +- {fmt(check['sd'])} ({len(check['values'])})"
                           if check else "-")
-            sims = [v for v in r["simulated"] if v is not None]
-            sd = r.get("simulated_scatter")
-            se = sd / math.sqrt(len(sims)) if sd is not None and sims else None
-            err = 100 * r["relative_error"] if r["relative_error"] is not None else None
-            ok = err is not None and abs(err) <= REPOSE_TOLERANCE
+            sd, se, err, ok = row_stats(r, REPOSE_TOLERANCE)
             if err is not None:
                 errors.append(abs(err))
             inside += ok
@@ -464,11 +460,7 @@ class Pipeline:
                     self.p(f"| {m:g} % | {f:g} | {meas:.2f} | {s_sim:.2f} ({s_err:+.2f} %) | "
                            "not in the measurements | | | |")
                     continue
-                sims = [v for v in r["simulated"] if v is not None]
-                sd = r.get("simulated_scatter")
-                se = sd / math.sqrt(len(sims)) if sd is not None and sims else None
-                err = 100 * r["relative_error"] if r["relative_error"] is not None else None
-                ok = err is not None and abs(err) <= band
+                sd, se, err, ok = row_stats(r, band)
                 if err is not None:
                     errors.append(abs(err))
                 inside += ok
@@ -507,6 +499,17 @@ def set_pair_key(model, pair, key, value):
     if n != 1:
         sys.exit(f"pipeline: [pairs.{pair}] has no `{key}`")
     return model[:section.start(1)] + new + model[section.end(1):]
+
+
+def row_stats(r, band=None):
+    """A compare.json row's sd between seeds, standard error of the mean, relative error in
+    %, and whether that error is within `band` % (None: no band)."""
+    sims = [v for v in r["simulated"] if v is not None]
+    sd = r.get("simulated_scatter")
+    se = sd / math.sqrt(len(sims)) if sd is not None and sims else None
+    err = 100 * r["relative_error"] if r["relative_error"] is not None else None
+    ok = err is not None and band is not None and abs(err) <= band
+    return sd, se, err, ok
 
 
 def sign(v):

@@ -73,22 +73,29 @@ def fake_compare(out: Path):
     (out / "bonds" / "compare.json").write_text(json.dumps({"rows": rows}))
 
 
+def stand_in(case, cores, replicates, fake):
+    """Gives `case` a pipeline in a temporary OUT whose `tilth` is a stand-in: every call's
+    arguments go to `case.calls`, then `fake(argv)` writes the files tilth would have."""
+    case.pipeline = load_pipeline()
+    case.tmp = tempfile.TemporaryDirectory()
+    case.out = Path(case.tmp.name)
+    args = type("Args", (), {"out": str(case.out), "tilth": "tilth", "cores": cores,
+                             "replicates": replicates})()
+    case.pipe = case.pipeline.Pipeline(args)
+    case.calls = []
+
+    def run(*argv, capture=None):
+        argv = [str(a) for a in argv]
+        case.calls.append(argv)
+        fake(argv)
+        return ""
+
+    case.pipe.run = run
+
+
 class BondStage(unittest.TestCase):
     def setUp(self):
-        self.pipeline = load_pipeline()
-        self.tmp = tempfile.TemporaryDirectory()
-        out = Path(self.tmp.name)
-        args = type("Args", (), {"out": str(out), "tilth": "tilth", "cores": 1,
-                                 "replicates": 1})()
-        self.pipe = self.pipeline.Pipeline(args)
-        self.calls = []
-
-        def run(*argv, capture=None):
-            self.calls.append([str(a) for a in argv])
-            fake_compare(out)
-            return ""
-
-        self.pipe.run = run
+        stand_in(self, 1, 1, lambda argv: fake_compare(self.out))
         self.summary = self.pipe.bonds(REPO / "docs" / "li2022-statistics" / "per-test-bonds.toml", 3)
         self.report = "\n".join(self.pipe.report)
 
@@ -192,24 +199,13 @@ def fake_angle_compare(out: Path, seeds: int):
 
 class ReposeCalibrationStage(unittest.TestCase):
     def setUp(self):
-        self.pipeline = load_pipeline()
-        self.tmp = tempfile.TemporaryDirectory()
-        self.out = Path(self.tmp.name)
-        args = type("Args", (), {"out": str(self.out), "tilth": "tilth", "cores": 2,
-                                 "replicates": 8})()
-        self.pipe = self.pipeline.Pipeline(args)
-        self.calls = []
-
-        def run(*argv, capture=None):
-            argv = [str(a) for a in argv]
-            self.calls.append(argv)
+        def fake(argv):
             if argv[0] == "calibrate":
                 fake_calibration(self.out)
             else:
                 fake_angle_compare(self.out, 8)
-            return ""
 
-        self.pipe.run = run
+        stand_in(self, 2, 8, fake)
         self.line = self.pipe.calibrate_repose(REPO / "docs" / "li2022-repose-calibration" / "model.toml", 2, 10)
         self.report = "\n".join(self.pipe.report)
 

@@ -459,14 +459,10 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             17 + c as u64,
         );
         std::fs::create_dir_all(&args.out)?;
-        calibrate_report::write_samples(
-            &args.out.join(format!(
-                "posterior-{}.csv",
-                super::rsm_plot::slug(&describe(&conds))
-            )),
-            &params,
-            &post,
-        )?;
+        // Per-condition files: posterior-SLUG.csv, curve-SLUG.svg, contour-SLUG.svg.
+        let slug = super::rsm_plot::slug(&describe(&conds));
+        let file = |kind: &str, ext: &str| args.out.join(format!("{kind}-{slug}.{ext}"));
+        calibrate_report::write_samples(&file("posterior", "csv"), &params, &post)?;
         let marks = vec![
             (start.clone(), "starting model".to_string()),
             (
@@ -499,7 +495,7 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         let curve = if params.len() == 1 {
             tilth_tools::rsm::plot::response_curve_checked_svg(
                 &fit,
-                &[solution.clone()],
+                std::slice::from_ref(&solution),
                 &[],
                 &checks,
             )?
@@ -507,23 +503,11 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             None
         };
         if let Some(svg) = curve {
-            std::fs::write(
-                args.out.join(format!(
-                    "curve-{}.svg",
-                    super::rsm_plot::slug(&describe(&conds))
-                )),
-                svg,
-            )?;
+            std::fs::write(file("curve", "svg"), svg)?;
         }
         if let Some(svg) = tilth_tools::rsm::plot::contour_marked_svg(&fit, &solution, &[], &marks)?
         {
-            std::fs::write(
-                args.out.join(format!(
-                    "contour-{}.svg",
-                    super::rsm_plot::slug(&describe(&conds))
-                )),
-                svg,
-            )?;
+            std::fs::write(file("contour", "svg"), svg)?;
         }
         results_out.push(ConditionResult {
             conditions: conds,
