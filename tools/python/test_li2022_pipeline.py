@@ -240,6 +240,10 @@ class ReposeCalibrationStage(unittest.TestCase):
         self.assertEqual(Path(cmp[cmp.index("--model") + 1]),
                          self.out / "repose-calibration" / "model.toml")
         self.assertEqual(cmp[cmp.index("--replicates") + 1], "8")
+        # Fresh seeds: none of the surface's (from 1, a few per setting) or the checks' (1001
+        # to 1001 + check seeds - 1).
+        first = int(cmp[cmp.index("--first-seed") + 1])
+        self.assertGreaterEqual(first, 1001 + 10)
 
     def test_every_moisture_gets_its_setting_its_validation_error_and_a_verdict(self):
         rows = self.rows()

@@ -39,6 +39,10 @@ pub struct CompareArgs {
     /// Runs per measured condition, with different seeds.
     #[arg(long, default_value_t = 1)]
     pub replicates: usize,
+    /// Seed of the first replicate (replicate r runs with seed first + r): a validation can
+    /// take seeds no calibration run used.
+    #[arg(long, default_value_t = 1)]
+    pub first_seed: u64,
     /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
     #[arg(long)]
     pub coarse: bool,
@@ -165,6 +169,18 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     if args.replicates == 0 {
         bail!("--replicates 0 is out of range: allowed 1 or more");
     }
+    if args.first_seed == 0
+        || args
+            .first_seed
+            .checked_add(args.replicates as u64)
+            .is_none()
+    {
+        bail!(
+            "--first-seed {} is out of range: allowed 1 to {}",
+            args.first_seed,
+            u64::MAX - args.replicates as u64
+        );
+    }
     let set = args.set.parse()?;
     let model = std::path::absolute(&args.model)?;
     if !model.exists() {
@@ -193,7 +209,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             data: &args.data,
             out: &args.out,
             replicates: args.replicates,
-            first_seed: 1,
+            first_seed: args.first_seed,
             coarse: args.coarse,
             set: &set,
             cores: args.cores,
@@ -577,6 +593,7 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
         "coarse": args.coarse,
         "set": args.set.set,
         "replicates": args.replicates,
+        "first_seed": args.first_seed,
         "rows": rows,
         "observables": summary,
         "verdicts": verdicts,

@@ -214,4 +214,49 @@ fn more_replicates_later_run_only_the_new_seeds() {
         three[..2],
         "the cache and the plain directory disagree"
     );
+    // A validation's own seeds: --first-seed 2 with one replicate is the same run as the
+    // second of three from seed 1, and its compare.json says which seeds it took.
+    let out = dir.join("from-2");
+    let o = tilth(&[
+        "compare",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--first-seed",
+        "2",
+        "--coarse",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        simulated(&out.join("compare.json"))[0].to_bits(),
+        three[1].to_bits()
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap();
+    assert_eq!(v["first_seed"], 2);
+    let o = tilth(&[
+        "compare",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        dir.join("from-0").to_str().unwrap(),
+        "--first-seed",
+        "0",
+        "--quiet",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--first-seed 0 is out of range"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("from-0").exists(),
+        "a refused command wrote its output directory"
+    );
 }
