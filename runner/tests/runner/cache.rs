@@ -119,10 +119,12 @@ fn a_cache_is_shared_by_commands_and_keyed_by_the_models_content() {
     assert_eq!(mtimes(&dirs[0]), before);
 }
 
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 fn simulated(compare_json: &Path) -> Vec<f64> {
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(compare_json).unwrap()).unwrap();
-    v["rows"][0]["simulated"]
+    read_json(compare_json)["rows"][0]["simulated"]
         .as_array()
         .unwrap()
         .iter()
@@ -141,8 +143,8 @@ fn more_replicates_later_run_only_the_new_seeds() {
     let data = dir.join("data.csv");
     std::fs::write(&data, DATA).unwrap();
     let cache = dir.join("cache");
-    let compare = |replicates: &str, cached: bool| {
-        let out = dir.join(if cached { "cached" } else { "plain" });
+    // `tilth compare` on the test's data into `out`, with `extra` arguments.
+    let run_compare = |out: &Path, extra: &[&str]| {
         let mut args = vec![
             "compare",
             "--model",
@@ -151,18 +153,21 @@ fn more_replicates_later_run_only_the_new_seeds() {
             data.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
-            "--replicates",
-            replicates,
-            "--coarse",
             "--quiet",
         ];
+        args.extend(extra);
+        tilth(&args)
+    };
+    let compare = |replicates: &str, cached: bool| {
+        let out = dir.join(if cached { "cached" } else { "plain" });
+        let mut extra = vec!["--replicates", replicates, "--coarse"];
         if cached {
-            args.extend(["--cache", cache.to_str().unwrap()]);
+            extra.extend(["--cache", cache.to_str().unwrap()]);
         }
-        let o = tilth(&args);
+        let o = run_compare(&out, &extra);
         assert!(
             o.status.success(),
-            "{args:?}: {}",
+            "{extra:?}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
         simulated(&out.join("compare.json"))
@@ -217,46 +222,22 @@ fn more_replicates_later_run_only_the_new_seeds() {
     // A validation's own seeds: --first-seed 2 with one replicate is the same run as the
     // second of three from seed 1, and its compare.json says which seeds it took.
     let out = dir.join("from-2");
-    let o = tilth(&[
-        "compare",
-        "--model",
-        "models/li2022.toml",
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--first-seed",
-        "2",
-        "--coarse",
-        "--quiet",
-    ]);
+    let o = run_compare(&out, &["--first-seed", "2", "--coarse"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(
         simulated(&out.join("compare.json"))[0].to_bits(),
         three[1].to_bits()
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap();
-    assert_eq!(v["first_seed"], 2);
-    let o = tilth(&[
-        "compare",
-        "--model",
-        "models/li2022.toml",
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        dir.join("from-0").to_str().unwrap(),
-        "--first-seed",
-        "0",
-        "--quiet",
-    ]);
+    assert_eq!(read_json(&out.join("compare.json"))["first_seed"], 2);
+    let refused = dir.join("from-0");
+    let o = run_compare(&refused, &["--first-seed", "0"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("--first-seed 0 is out of range"),
         "{err}"
     );
     assert!(
-        !dir.join("from-0").exists(),
+        !refused.exists(),
         "a refused command wrote its output directory"
     );
 }
