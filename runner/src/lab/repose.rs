@@ -18,6 +18,12 @@ use std::collections::BTreeMap;
 use tilth_kernel::sim::Simulation;
 use toml::Value;
 
+/// The funnel's default Verlet skin, in particle diameters. Grains leave the outlet at up
+/// to about 2 m/s, so with the kernel's usual 0.2 the list was rebuilt every six steps of a
+/// 300 g pour; 0.6 rebuilds a third as often and the run takes about a fifth less time, with
+/// the same bits (the skin only decides which pairs out of contact are listed).
+pub const SKIN_FRACTION: f64 = 0.6;
+
 /// `[repose]`: the test's parameters (SI units).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -186,6 +192,10 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
             "simulation",
             t(&[
                 ("dt", f(dt)),
+                (
+                    "skin",
+                    f(c.sim.skin_fraction.unwrap_or(SKIN_FRACTION) * mix.min_diameter()),
+                ),
                 ("duration", f(p.max_time)),
                 ("seed", Value::Integer(c.sim.seed as i64)),
                 ("threads", Value::Integer(c.sim.threads as i64)),

@@ -164,7 +164,14 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         ("format_version", Value::Integer(1)),
         (
             "simulation",
-            specimen::simulation(c, steps.prepare, duration, flange + 0.02, z_top + 0.02),
+            specimen::simulation(
+                c,
+                steps.prepare,
+                duration,
+                flange + 0.02,
+                z_top + 0.02,
+                mix.min_diameter(),
+            ),
         ),
         ("materials", materials),
         ("contact", contact),

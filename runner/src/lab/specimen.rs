@@ -292,9 +292,10 @@ pub fn fill(count: i64, mix: &SizeMix, radius: f64, z0: f64, z1: f64) -> Value {
 }
 
 /// The `[simulation]` table of a specimen test.
-pub fn simulation(c: &Common, dt: f64, duration: f64, half: f64, top: f64) -> Value {
+pub fn simulation(c: &Common, dt: f64, duration: f64, half: f64, top: f64, d: f64) -> Value {
     t(&[
         ("dt", f(dt)),
+        ("skin", f(c.sim.skin_fraction.unwrap_or(0.2) * d)),
         ("duration", f(duration)),
         ("seed", Value::Integer(c.sim.seed as i64)),
         ("threads", Value::Integer(c.sim.threads as i64)),

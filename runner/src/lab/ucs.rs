@@ -151,7 +151,14 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
         ("format_version", Value::Integer(1)),
         (
             "simulation",
-            specimen::simulation(c, steps.prepare, duration, r + 0.05, z_top + 0.02),
+            specimen::simulation(
+                c,
+                steps.prepare,
+                duration,
+                r + 0.05,
+                z_top + 0.02,
+                mix.min_diameter(),
+            ),
         ),
         ("materials", materials),
         ("contact", contact),

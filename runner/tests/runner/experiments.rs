@@ -244,3 +244,59 @@ fn a_jammed_funnel_is_an_error_not_a_heap() {
         "{err}"
     );
 }
+
+/// The funnel's skin is a speed setting: a run with the kernel's usual 0.2 diameters and one
+/// with the funnel's default list different pairs out of contact, rebuild the list at
+/// different steps, and end in the same state to the bit.
+#[test]
+fn the_funnel_skin_changes_the_rebuilds_not_the_bits() {
+    let dir = std::env::temp_dir().join(format!("tilth-skin-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml");
+    let run = |skin: &str| -> serde_json::Value {
+        let file = dir.join(format!("skin{skin}.toml"));
+        std::fs::write(
+            &file,
+            format!(
+                "format_version = 1\nexperiment = \"repose\"\nmodel = {:?}\ncoarse = true\n[conditions]\nmoisture_pct = 6\n[simulation]\nseed = 3\n{skin}\n[repose]\nmass_g = 12\n",
+                model.display().to_string()
+            ),
+        )
+        .unwrap();
+        let out = tilth()
+            .args(["run", "--quiet", "--json", "--out"])
+            .arg(dir.join(format!("out{}", skin.len())))
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let usual = run("skin_fraction = 0.2");
+    let funnel = run("");
+    let (f, u) = (&funnel["report"], &usual["report"]);
+    assert!(
+        f["neighbour_rebuilds"].as_u64().unwrap() < u["neighbour_rebuilds"].as_u64().unwrap(),
+        "{} {}",
+        f["neighbour_rebuilds"],
+        u["neighbour_rebuilds"]
+    );
+    for key in [
+        "kinetic_energy",
+        "rotational_kinetic_energy",
+        "max_speed",
+        "steps",
+        "contacts",
+        "walls",
+    ] {
+        assert!(!f[key].is_null(), "{key}");
+        assert_eq!(f[key], u[key], "{key}");
+    }
+    assert_eq!(funnel["heap"], usual["heap"]);
+    assert_eq!(funnel["reduced"], usual["reduced"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
