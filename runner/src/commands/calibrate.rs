@@ -78,6 +78,16 @@ pub struct CalibrateArgs {
     /// error falls as 1/sqrt(n), and a tolerance of 2 % needs it well below 2 %.
     #[arg(long)]
     pub check_seeds: Option<usize>,
+    /// Precision of a check: while the standard error of its mean is above this many percent
+    /// of the measurement, the check takes `--check-seeds` more seeds (up to
+    /// `--max-check-seeds`), unless it already misses by more than the tolerance plus two
+    /// standard errors (the Newton step needs no more to know its direction). Without it,
+    /// every check has `--check-seeds` seeds.
+    #[arg(long, value_name = "PCT")]
+    pub check_se: Option<f64>,
+    /// The most seeds a check takes with `--check-se` (default: four times `--check-seeds`).
+    #[arg(long)]
+    pub max_check_seeds: Option<usize>,
     /// Done when the mean of the runs is within this many percent of the measurement.
     #[arg(long, default_value_t = 2.0)]
     pub tolerance: f64,
@@ -205,6 +215,11 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     if args.joint {
+        if args.check_se.is_some() {
+            bail!(
+                "--check-se adds seeds to one condition's check; a --joint calibration checks every condition at one setting: leave it out"
+            );
+        }
         check_counts(args)?;
         return super::calibrate_joint::joint(args, out);
     }
@@ -333,46 +348,27 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     let mut settings: Vec<Vec<f64>> = report.iter().map(|r| r.5.clone()).collect();
     let mut iterations: Vec<Vec<Iteration>> = vec![vec![]; report.len()];
     let mut active: Vec<bool> = vec![true; report.len()];
+    let targets: Vec<f64> = report.iter().map(|r| r.0.value).collect();
     for it in 0..=args.refine {
         if !active.iter().any(|a| *a) {
             break;
         }
-        let mut runs = vec![];
-        for (c, r) in report.iter().enumerate().filter(|(c, _)| active[*c]) {
-            for s in 0..args.check_seeds.unwrap_or(args.seeds) {
-                let mut values = r.1.clone();
-                for (p, v) in params.iter().zip(&settings[c]) {
-                    values.insert(p.name.clone(), *v);
-                }
-                runs.push(PlannedRun {
-                    id: runs.len() + 1,
-                    std: c,
-                    replicate: s + 1,
-                    coded: BTreeMap::new(),
-                    values,
-                    seed: 1001 + s as u64,
-                });
-            }
-        }
-        let plan = Plan::generated(
-            &format!("{}-check-{it}", args.test),
-            text.clone(),
-            Path::new("."),
-            factors.clone(),
-            runs,
+        let mut all = check(
+            it,
+            &active,
+            &settings,
+            &report.iter().map(|r| r.1.clone()).collect::<Vec<_>>(),
+            &targets,
+            &params,
+            (&text, &factors),
+            args,
+            &stop,
         )?;
-        let values = run_plan(&plan, &args.out.join(format!("check-{it}")), args, &stop)?;
         for c in 0..report.len() {
             if !active[c] {
                 continue;
             }
-            let got: Vec<f64> = plan
-                .runs
-                .iter()
-                .zip(&values)
-                .filter(|(r, _)| r.std == c)
-                .filter_map(|(_, v)| *v)
-                .collect();
+            let got = std::mem::take(&mut all[c]);
             if got.is_empty() {
                 bail!(
                     "{}: every run at the chosen setting failed (see {})",
@@ -543,6 +539,10 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         "set": args.set.set,
         "seeds": args.seeds,
         "check_seeds": args.check_seeds.unwrap_or(args.seeds),
+        "check_se_pct": args.check_se,
+        "max_check_seeds": args.check_se.map(|_| args
+            .max_check_seeds
+            .unwrap_or(4 * args.check_seeds.unwrap_or(args.seeds))),
         "tolerance_pct": args.tolerance,
         "params": params,
         "conditions": results_out,
@@ -558,12 +558,118 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     Ok(())
 }
 
+/// One direct check of every active condition at its setting: `--check-seeds` seeds (1001
+/// on), in `DIR/check-IT`; with `--check-se`, more batches of as many seeds (in
+/// `DIR/check-IT-K`) for each condition whose mean is not yet precise enough
+/// ([`wants_more_seeds`]). Returns every condition's values (empty for inactive ones).
+#[allow(clippy::too_many_arguments)]
+fn check(
+    it: usize,
+    active: &[bool],
+    settings: &[Vec<f64>],
+    conditions: &[BTreeMap<String, f64>],
+    targets: &[f64],
+    params: &[Param],
+    (text, factors): (&str, &[Factor]),
+    args: &CalibrateArgs,
+    stop: &Arc<AtomicBool>,
+) -> Result<Vec<Vec<f64>>> {
+    let batch = args.check_seeds.unwrap_or(args.seeds);
+    let most = match args.check_se {
+        Some(_) => args.max_check_seeds.unwrap_or(4 * batch),
+        None => batch,
+    };
+    let mut got: Vec<Vec<f64>> = vec![vec![]; active.len()];
+    let mut planned = vec![0usize; active.len()];
+    let mut want = active.to_vec();
+    for k in 0.. {
+        let mut runs = vec![];
+        for c in (0..active.len()).filter(|c| want[*c]) {
+            for s in planned[c]..(planned[c] + batch).min(most) {
+                let mut values = conditions[c].clone();
+                for (p, v) in params.iter().zip(&settings[c]) {
+                    values.insert(p.name.clone(), *v);
+                }
+                runs.push(PlannedRun {
+                    id: runs.len() + 1,
+                    std: c,
+                    replicate: s + 1,
+                    coded: BTreeMap::new(),
+                    values,
+                    seed: 1001 + s as u64,
+                });
+            }
+        }
+        if runs.is_empty() {
+            break;
+        }
+        // The first batch keeps the name and place a check always had, so that an earlier
+        // calibration's runs are reused.
+        let name = match k {
+            0 => format!("check-{it}"),
+            k => format!("check-{it}-{k}"),
+        };
+        let plan = Plan::generated(
+            &format!("{}-{name}", args.test),
+            text.to_string(),
+            Path::new("."),
+            factors.to_vec(),
+            runs,
+        )?;
+        let values = run_plan(&plan, &args.out.join(&name), args, stop)?;
+        let ran: Vec<usize> = (0..active.len()).filter(|c| want[*c]).collect();
+        for c in ran {
+            got[c].extend(
+                plan.runs
+                    .iter()
+                    .zip(&values)
+                    .filter(|(r, _)| r.std == c)
+                    .filter_map(|(_, v)| *v),
+            );
+            planned[c] = (planned[c] + batch).min(most);
+            want[c] = planned[c] < most && wants_more_seeds(&got[c], targets[c], args);
+        }
+    }
+    Ok(got)
+}
+
+/// Whether a check's mean needs more seeds under `--check-se PCT`: its standard error is
+/// above PCT % of the measurement (or unknown, with one run), and it does not already miss
+/// by more than the tolerance plus two standard errors.
+pub fn wants_more_seeds(values: &[f64], target: f64, args: &CalibrateArgs) -> bool {
+    let Some(pct) = args.check_se else {
+        return false;
+    };
+    let (mean, sd) = mean_sd(values);
+    let Some(sd) = sd else {
+        return true;
+    };
+    let se = 100.0 * sd / (values.len() as f64).sqrt() / target.abs();
+    let err = 100.0 * (mean - target) / target;
+    se > pct && err.abs() - 2.0 * se <= args.tolerance
+}
+
 fn check_counts(args: &CalibrateArgs) -> Result<()> {
     if args.check_seeds == Some(0) {
         bail!("--check-seeds 0 is out of range: allowed 1 or more");
     }
     if args.seeds == 0 {
         bail!("--seeds 0 is out of range: allowed 1 or more");
+    }
+    if let Some(se) = args.check_se {
+        if !(se > 0.0 && se.is_finite()) {
+            bail!("--check-se {se} is out of range: allowed > 0 (percent of the measurement)");
+        }
+    }
+    let batch = args.check_seeds.unwrap_or(args.seeds);
+    match args.max_check_seeds {
+        Some(_) if args.check_se.is_none() => {
+            bail!("--max-check-seeds is the cap of --check-se; give --check-se PCT too")
+        }
+        Some(max) if max < batch => bail!(
+            "--max-check-seeds {max} is out of range: allowed at least --check-seeds ({batch})"
+        ),
+        _ => {}
     }
     if !(args.tolerance > 0.0) {
         bail!(

@@ -306,7 +306,7 @@ fn chrono_free_note() -> String {
 
 pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]) -> String {
     let mut s = format!(
-        "# Calibration of {} against {}\n\n{} free parameter(s): {}; {} seeds per surface setting, {} per check; tolerance {} %{}.\n\n",
+        "# Calibration of {} against {}\n\n{} free parameter(s): {}; {} seeds per surface setting, {} per check{}; tolerance {} %{}.\n\n",
         args.test,
         args.data.display(),
         params.len(),
@@ -317,6 +317,14 @@ pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]
             .join(", "),
         args.seeds,
         args.check_seeds.unwrap_or(args.seeds),
+        match args.check_se {
+            Some(pct) => format!(
+                " (more, up to {}, until the mean's standard error is at most {pct} % of the measurement)",
+                args.max_check_seeds
+                    .unwrap_or(4 * args.check_seeds.unwrap_or(args.seeds))
+            ),
+            None => String::new(),
+        },
         args.tolerance,
         if args.coarse { "; coarse preset" } else { "" }
     );

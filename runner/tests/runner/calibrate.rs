@@ -393,3 +393,140 @@ fn a_joint_parameter_one_test_cannot_take_is_refused_before_any_run() {
     );
     assert!(!dir.join("surface-direct_shear").exists(), "{err}");
 }
+
+/// `--check-se`: a check takes batches of `--check-seeds` seeds until its mean's standard
+/// error is at most the given percent of the measurement, at most `--max-check-seeds`, and
+/// stops early only when it already misses by more than the tolerance plus two standard
+/// errors. Asked for an unreachable precision, the check at 6 % runs all three seeds (1001,
+/// 1002, 1003) in three batches, unless the rule stops it, which is then checked from the
+/// values.
+#[test]
+fn a_check_takes_seeds_until_its_mean_is_precise() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-check-se");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = tilth(&[
+        "calibrate",
+        "--model",
+        "models/li2022.toml",
+        "--data",
+        "data/li2022/measurements.csv",
+        "--test",
+        "repose",
+        "--param",
+        "soil-soil.rolling_friction=0.05:0.45",
+        "--seeds",
+        "1",
+        "--check-seeds",
+        "1",
+        "--check-se",
+        "1e-6",
+        "--max-check-seeds",
+        "3",
+        "--refine",
+        "0",
+        "--coarse",
+        "--where",
+        "moisture_pct=6",
+        "--cores",
+        "2",
+        "--quiet",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("calibration.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["check_se_pct"], 1e-6);
+    assert_eq!(v["max_check_seeds"], 3);
+    let values: Vec<f64> = v["conditions"][0]["iterations"][0]["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let n = values.len();
+    assert!(n >= 2, "{values:?}");
+    if n == 2 {
+        // Stopped early: the two runs must miss by more than 2 % plus two standard errors.
+        let mean = 0.5 * (values[0] + values[1]);
+        let se = 100.0 * (values[0] - values[1]).abs() / 2f64.sqrt() / 2f64.sqrt() / 35.53;
+        let err = 100.0 * (mean - 35.53) / 35.53;
+        assert!(err.abs() - 2.0 * se > 2.0, "{values:?}");
+    } else {
+        assert_eq!(n, 3);
+    }
+    // One batch per directory, each its own seed.
+    let seed = |d: &str| -> u64 {
+        let s: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(d).join("runs/001/summary.json")).unwrap(),
+        )
+        .unwrap();
+        s["run"]["seed"].as_u64().unwrap()
+    };
+    assert_eq!(seed("check-0"), 1001);
+    assert_eq!(seed("check-0-1"), 1002);
+    assert_eq!(dir.join("check-0-2").exists(), n == 3);
+    if n == 3 {
+        assert_eq!(seed("check-0-2"), 1003);
+    }
+    let md = std::fs::read_to_string(dir.join("calibration.md")).unwrap();
+    assert!(
+        md.contains("until the mean's standard error is at most 0.000001 %"),
+        "{md}"
+    );
+}
+
+/// The precision options are checked before any run.
+#[test]
+fn check_precision_options_out_of_range_are_refused() {
+    for (extra, want) in [
+        (
+            &["--check-se", "0"][..],
+            "--check-se 0 is out of range: allowed > 0",
+        ),
+        (
+            &["--max-check-seeds", "8"][..],
+            "--max-check-seeds is the cap of --check-se",
+        ),
+        (
+            &[
+                "--check-se",
+                "1",
+                "--check-seeds",
+                "4",
+                "--max-check-seeds",
+                "3",
+            ][..],
+            "--max-check-seeds 3 is out of range: allowed at least --check-seeds (4)",
+        ),
+    ] {
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-check-se-bad");
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut args = vec![
+            "calibrate",
+            "--model",
+            "models/li2022.toml",
+            "--data",
+            "data/li2022/measurements.csv",
+            "--test",
+            "repose",
+            "--param",
+            "soil-soil.rolling_friction=0.05:0.45",
+            "--coarse",
+            "--quiet",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = tilth(&args);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{extra:?}: {err}");
+        assert!(!dir.exists(), "{extra:?}: wrote {}", dir.display());
+    }
+}
