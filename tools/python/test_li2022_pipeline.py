@@ -269,5 +269,128 @@ class ReposeCalibrationStage(unittest.TestCase):
         self.assertIn("worst error tilth 3.10 %", self.line)
 
 
+# The repose-refinement stage: a calibration whose validation missed at 6 % (inside the range,
+# two checks with the same seeds), at 9 % (one check only: no slope) and at 12 % (rolling
+# friction at the end of its range); 3 % passed.
+REFINE_ANGLES = {3: 32.76, 6: 35.53, 9: 37.89, 12: 43.87}
+REFINE_BEFORE = {3: 0.010, 6: -0.035, 9: 0.025, 12: -0.027}
+
+
+def fake_refinement_inputs(out: Path):
+    def cond(m, its):
+        return {"conditions": {"moisture_pct": float(m)}, "measured": REFINE_ANGLES[m],
+                "calibrated": [its[-1]["setting"][0]], "iterations": its}
+
+    def it(x, values):
+        return {"setting": [x], "values": values, "mean": sum(values) / len(values)}
+
+    conditions = [
+        cond(3, [it(0.35, [32.0, 33.0])]),
+        # slope (36.5 - 35.5) / (0.17 - 0.15) = 50 degrees per unit
+        cond(6, [it(0.17, [36.0, 37.0]), it(0.15, [35.0, 36.0])]),
+        cond(9, [it(0.13, [38.0, 39.0])]),
+        cond(12, [it(0.5, [42.0, 43.0]), it(0.6, [43.0, 43.5])]),
+    ]
+    (out / "repose-calibration").mkdir(parents=True, exist_ok=True)
+    (out / "repose-calibration" / "calibration.json").write_text(json.dumps({"conditions": conditions}))
+    (out / "repose-calibration" / "model.toml").write_text(
+        (REPO / "docs" / "li2022-repose-calibration" / "calibrated-model.toml").read_text())
+    rows = []
+    for m, e in REFINE_BEFORE.items():
+        mean = REFINE_ANGLES[m] * (1 + e)
+        rows.append({"test": "repose", "observable": "repose_angle_deg", "value": REFINE_ANGLES[m],
+                     "conditions": {"moisture_pct": float(m)},
+                     # 6 %: 34.0 and 34.5 with the check's 35.0 and 36.0 pool to 34.875
+                     "simulated": [34.0, 34.5] if m == 6 else [mean - 1.0, mean + 1.0],
+                     "simulated_mean": mean, "simulated_scatter": 1.0, "relative_error": e})
+    (out / "repose-validation").mkdir(parents=True, exist_ok=True)
+    (out / "repose-validation" / "compare.json").write_text(json.dumps({"rows": rows}))
+
+
+class ReposeRefinementStage(unittest.TestCase):
+    AFTER = {6: 0.004, 12: -0.011}
+
+    def setUp(self):
+        self.starts = []
+
+        def fake(argv):
+            out = Path(argv[argv.index("--out") + 1])
+            out.mkdir(parents=True, exist_ok=True)
+            if argv[0] == "calibrate":
+                start = Path(argv[argv.index("--model") + 1]).read_text()
+                self.starts.append(start)
+                (out / "model.toml").write_text(start + "\n# surface energy calibrated\n")
+                (out / "calibration.json").write_text(json.dumps({"conditions": [{
+                    "calibrated": [0.1731], "simulated_mean": 43.9,
+                    "iterations": [{"values": [43.9] * 12}]}]}))
+            else:
+                self.data = Path(argv[argv.index("--data") + 1]).read_text()
+                rows = []
+                for m, e in self.AFTER.items():
+                    mean = REFINE_ANGLES[m] * (1 + e)
+                    rows.append({"value": REFINE_ANGLES[m], "conditions": {"moisture_pct": float(m)},
+                                 "simulated": [mean - 1.0, mean + 1.0] * 10, "simulated_mean": mean,
+                                 "simulated_scatter": 1.0, "relative_error": e})
+                (out / "compare.json").write_text(json.dumps({"rows": rows}))
+
+        stand_in(self, 2, 10, lambda argv: None)
+        fake_refinement_inputs(self.out)
+        self.pipe.run = lambda *argv, capture=None: (self.calls.append([str(a) for a in argv]),
+                                                     fake([str(a) for a in argv]))
+        self.line = self.pipe.refine_repose(2, 12, 20)
+        self.report = "\n".join(self.pipe.report)
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def rolling(self, model):
+        line = next(ln for ln in model.splitlines() if ln.startswith("rolling_friction"))
+        return [float(v) for v in re.search(r"\by = \[([^\]]*)\]", line).group(1).split(",")]
+
+    def test_the_clamped_moisture_is_calibrated_on_its_cohesion_from_the_range_middle(self):
+        cal = self.calls[0]
+        self.assertEqual(cal[0], "calibrate")
+        self.assertEqual(cal[cal.index("--where") + 1], "moisture_pct=12")
+        self.assertEqual(cal[cal.index("--param") + 1], self.pipeline.REFINE_COHESION)
+        self.assertEqual(cal[cal.index("--check-seeds") + 1], "12")
+        before = self.rolling((self.out / "repose-calibration" / "model.toml").read_text())
+        start = self.rolling(self.starts[0])
+        self.assertEqual(start, before[:3] + [0.35])
+
+    def test_the_moisture_inside_its_range_takes_one_newton_step_from_the_pooled_runs(self):
+        # Pooled: the last check (35.0, 36.0) and the validation (34.0, 34.5): 34.875; slope
+        # 50 per unit: 0.15 + (35.53 - 34.875) / 50 = 0.1631.
+        final = self.rolling((self.out / "repose-refinement" / "model.toml").read_text())
+        self.assertAlmostEqual(final[1], round(0.15 + (35.53 - 34.875) / 50, 4), places=9)
+        self.assertEqual(final[3], 0.35)
+        self.assertIn("# surface energy calibrated",
+                      (self.out / "repose-refinement" / "model.toml").read_text())
+
+    def test_only_the_refined_moistures_are_validated_on_fresh_seeds(self):
+        cmp = self.calls[-1]
+        self.assertEqual(cmp[0], "compare")
+        self.assertEqual(cmp[cmp.index("--first-seed") + 1], "3001")
+        self.assertEqual(cmp[cmp.index("--replicates") + 1], "20")
+        rows = [ln for ln in self.data.splitlines()[1:]]
+        self.assertEqual([r.split(",")[1] for r in rows], ["6", "12"])
+
+    def test_the_report_keeps_the_others_and_says_why(self):
+        cells = {}
+        for line in self.report.splitlines():
+            c = [x.strip() for x in line.strip("|").split("|")]
+            if len(c) == 8 and c[0].endswith("%") and c[0][0].isdigit():
+                cells[int(c[0].rstrip(" %"))] = c
+        self.assertEqual(cells[3][3], "kept")
+        self.assertEqual(cells[3][6], "+1.00 %")
+        self.assertTrue(cells[9][3].startswith("no step"), cells[9])
+        self.assertEqual(cells[6][6], "+0.40 %")
+        self.assertIn("0.1500 -> 0.1631", cells[6][3])
+        self.assertIn("surface energy 0.1731", cells[12][3])
+        self.assertEqual(cells[12][7], "yes")
+        self.assertEqual(cells[9][7], "no")
+        self.assertTrue(self.line.startswith("3 of 4 moistures within 2 %"), self.line)
+        self.assertIn("worst error 2.50 %", self.line)
+
+
 if __name__ == "__main__":
     unittest.main()
