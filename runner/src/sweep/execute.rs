@@ -73,6 +73,12 @@ pub fn budget(requested: Option<usize>) -> Result<Budget> {
                 ids.join(",")
             );
         }
+        // A share of the machine: pinned, every such process would take the first cores
+        // (two `--cores 1` sweeps side by side ran on one core at half speed each), so the
+        // operating system places the workers instead.
+        if c < n {
+            pin = false;
+        }
         n = c;
     }
     Ok(Budget {
@@ -423,4 +429,26 @@ pub fn print_table(table: &[Vec<String>], out: &mut dyn Write) -> Result<()> {
         writeln!(out, "{}", cells.join("  "))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::budget;
+
+    /// A sweep on a share of the machine is not pinned (two of them would share the first
+    /// core); one on all of it is, outside Slurm.
+    #[test]
+    fn only_a_sweep_on_every_allowed_core_is_pinned() {
+        let all = budget(None).unwrap();
+        let n = all.cores.len();
+        let slurm = std::env::var("SLURM_CPUS_PER_TASK").is_ok()
+            || std::env::var("SLURM_CPUS_ON_NODE").is_ok();
+        if !slurm {
+            assert!(all.pin);
+        }
+        let one = budget(Some(1)).unwrap();
+        assert_eq!(one.cores.len(), 1);
+        assert_eq!(one.pin, n == 1 && !slurm);
+        assert_eq!(budget(Some(n)).unwrap().pin, all.pin);
+    }
 }
