@@ -155,6 +155,10 @@ impl SetArgs {
             if out.iter().any(|s| s.test == test && s.key == key) {
                 bail!("--set {raw}: {test}.{key} is set twice");
             }
+            // Checked here, not when the test's runs are planned: a test without measured rows
+            // never plans any, and a mistyped key would pass unseen.
+            crate::lab::experiment::check_test_key(test, key, &value)
+                .map_err(|e| anyhow!("--set {raw}: {e}"))?;
             out.push(TestSetting {
                 test: test.to_string(),
                 key: key.to_string(),

@@ -245,6 +245,22 @@ fn bond_overrides_into_model(model: &mut Model, scene_overrides: &[(String, Valu
     }
 }
 
+/// Whether `key = value` can stand in the test's own table (`[repose]`, `[direct_shear]` or
+/// `[ucs]`): a key it has, a value of the right type (ranges are checked when a run is built).
+/// Errs with serde's sentence, which lists the keys the table has.
+pub fn check_test_key(test: &str, key: &str, value: &Value) -> Result<(), String> {
+    let mut t = toml::Table::new();
+    t.insert(key.to_string(), value.clone());
+    let v = Value::Table(t);
+    let r = match test {
+        "repose" => v.try_into::<repose::ReposeParams>().map(|_| ()),
+        "direct_shear" => v.try_into::<shear::ShearParams>().map(|_| ()),
+        "ucs" => v.try_into::<ucs::UcsParams>().map(|_| ()),
+        other => return Err(format!("`{other}` is not a test")),
+    };
+    r.map_err(|e| one_line(&e))
+}
+
 fn one_line(e: &toml::de::Error) -> String {
     e.message().split_whitespace().collect::<Vec<_>>().join(" ")
 }

@@ -80,7 +80,7 @@ fn a_set_key_reaches_every_run_of_its_test() {
 #[test]
 fn a_bad_set_is_refused_before_any_run() {
     let (dir, data) = setup("set-refused");
-    let cases: [(&str, &[&str]); 5] = [
+    let cases: [(&str, &[&str]); 7] = [
         (
             "repose.tray_diamter=0.1",
             &["tray_diamter", "unknown field", "tray_diameter"],
@@ -95,6 +95,12 @@ fn a_bad_set_is_refused_before_any_run() {
         ),
         ("repose.mass_g", &["--set repose.mass_g", "TEST.KEY=VALUE"]),
         ("repose.mass_g=lots", &["`lots` is not a value"]),
+        // A test with no rows here: its key is still checked, not skipped unseen.
+        (
+            "ucs.heigth=0.05",
+            &["--set ucs.heigth=0.05", "unknown field `heigth`", "height"],
+        ),
+        ("ucs.height=\"tall\"", &["--set ucs.height", "invalid type"]),
     ];
     for (k, (set, words)) in cases.iter().enumerate() {
         let out = dir.join(format!("out-{k}"));
