@@ -214,6 +214,9 @@ fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
     let outcome = execute::execute(&plan, &opts, stop)?;
     let table = execute::write_results(&plan, &dir)?;
     execute::print_table(&table, out)?;
+    for line in execute::scatter_lines(&plan, &table) {
+        writeln!(out, "{line}")?;
+    }
     let done = outcome
         .rows
         .iter()

@@ -12,7 +12,10 @@
 //! - `steepest_ascent`: `direction` (a table factor -> first-order coefficient in coded
 //!   units), `origin` (factor -> coded start, default 0), `step` (coded step of the factor
 //!   with the largest coefficient), `steps` (points on the path, the origin included);
-//! - `latin_hypercube`, `sobol`: `runs`.
+//! - `latin_hypercube`, `sobol`: `runs`;
+//! - `replicates`: none, and no `[[factors]]`: the `[fixed]` setting run `replicates` times,
+//!   seeds `seed` to `seed + replicates - 1` (extra specimens at a solved setting, or the
+//!   scatter between seeds of one model).
 
 use super::file::{FactorSection, Source};
 use anyhow::Result;
@@ -64,6 +67,7 @@ pub fn expand(
         "central_composite" => &["alpha"],
         "steepest_ascent" => &["direction", "origin", "step", "steps"],
         "latin_hypercube" | "sobol" => &["runs"],
+        ONE_SETTING => &[],
         other => {
             return Err(err(format!(
                 "type = \"{other}\" is unknown: allowed {}",
@@ -182,6 +186,20 @@ pub fn expand(
             let rows = design::steepest_ascent(&direction, &origin, step, steps).map_err(de)?;
             (format!("steepest-ascent path, {steps} points"), rows, 0)
         }
+        ONE_SETTING => {
+            if centre_given.is_some_and(|c| c > 0) {
+                return Err(err(format!(
+                    "centre_points: a type = \"{ONE_SETTING}\" design has no centre to add; give replicates"
+                )));
+            }
+            let n = uint("replicates")?.unwrap_or(1);
+            let title = if n == 1 {
+                "one setting, 1 seed".to_string()
+            } else {
+                format!("one setting, {n} seeds")
+            };
+            (title, vec![vec![]], 0)
+        }
         _ => {
             let runs = uint("runs")?.ok_or_else(|| err("needs `runs`, a whole number".into()))?;
             let seed = uint("seed")?.unwrap_or(1) as u64;
@@ -271,8 +289,11 @@ pub fn expand(
     })
 }
 
+/// The design of one setting over several seeds (no factors).
+pub const ONE_SETTING: &str = "replicates";
+
 /// Every `type` a design may have.
-pub const KINDS: [&str; 7] = [
+pub const KINDS: [&str; 8] = [
     "full_factorial",
     "plackett_burman",
     "box_behnken",
@@ -280,4 +301,5 @@ pub const KINDS: [&str; 7] = [
     "steepest_ascent",
     "latin_hypercube",
     "sobol",
+    ONE_SETTING,
 ];

@@ -329,10 +329,13 @@ fn finished_line(summary: &RunSummary, done: u64, todo: usize) -> String {
         .iter()
         .map(|(name, value)| format!("{name} = {}", num(*value)))
         .collect();
+    let mut settings = settings.join(", ");
+    if !settings.is_empty() {
+        settings.push_str(", ");
+    }
     let mut line = format!(
-        "[{done}/{todo}] run {} ({}, seed {}) {} in {:.0} s",
+        "[{done}/{todo}] run {} ({settings}seed {}) {} in {:.0} s",
         run.id,
-        settings.join(", "),
         run.seed,
         summary.status.as_str(),
         summary.wall_seconds
@@ -409,6 +412,50 @@ pub fn write_results(plan: &Plan, out: &Path) -> Result<Vec<Vec<String>>> {
     let csv: String = table.iter().map(|l| l.join(",") + "\n").collect();
     write_atomic(&out.join("results.csv"), csv.as_bytes())?;
     Ok(table)
+}
+
+/// For a sweep of one setting over several seeds (no factors): each observable's mean, the
+/// standard deviation between seeds and the standard error of the mean, from the results
+/// table's done runs. Empty for a sweep with factors, where the runs differ in their settings.
+pub fn scatter_lines(plan: &Plan, table: &[Vec<String>]) -> Vec<String> {
+    let Some((head, rows)) = table.split_first() else {
+        return vec![];
+    };
+    if !plan.factors.is_empty() {
+        return vec![];
+    }
+    let status = head.iter().position(|h| h == "status");
+    let mut out = vec![];
+    for key in REDUCED.iter().chain(&["heap_cone_angle_deg"]) {
+        let Some(col) = head.iter().position(|h| h == key) else {
+            continue;
+        };
+        let values: Vec<f64> = rows
+            .iter()
+            .filter(|r| status.is_some_and(|s| r[s] == Status::Done.as_str()))
+            .filter_map(|r| r[col].parse::<f64>().ok())
+            .collect();
+        if values.len() < 2 {
+            continue;
+        }
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let se = sd / n.sqrt();
+        let rel = if mean != 0.0 {
+            format!(" ({:.2} % of the mean)", 100.0 * se / mean.abs())
+        } else {
+            String::new()
+        };
+        out.push(format!(
+            "{key} over {} seeds: mean {}, sd {}, s.e. {}{rel}",
+            values.len(),
+            num(mean),
+            num(sd),
+            num(se)
+        ));
+    }
+    out
 }
 
 /// The results table, aligned, for the terminal.

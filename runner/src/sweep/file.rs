@@ -146,16 +146,35 @@ pub fn parse(source: &Source) -> Result<SweepFile> {
             format!("experiment.threads = {threads} is out of range: allowed 1 or 2"),
         ));
     }
-    check_factors(source, &file.factors)?;
+    check_factors(source, &file.factors, &file.design)?;
     Ok(file)
 }
 
-fn check_factors(source: &Source, factors: &[Spanned<FactorSection>]) -> Result<()> {
-    if factors.is_empty() {
-        bail!(
-            "{}: the sweep has no [[factors]]; add at least one",
-            source.path.display()
-        );
+fn check_factors(
+    source: &Source,
+    factors: &[Spanned<FactorSection>],
+    design: &Spanned<toml::Table>,
+) -> Result<()> {
+    // A `replicates` design runs one setting over several seeds: it has no factors, and
+    // every other design needs at least one.
+    let one_setting =
+        design.get_ref().get("type").and_then(|t| t.as_str()) == Some(super::design::ONE_SETTING);
+    match (one_setting, factors.first()) {
+        (true, Some(f)) => {
+            return Err(source.err(
+                &f.span(),
+                format!(
+                    "[design] type = \"{}\" runs one setting over several seeds and takes no [[factors]]; put the setting in [fixed]",
+                    super::design::ONE_SETTING
+                ),
+            ));
+        }
+        (false, None) => bail!(
+            "{}: the sweep has no [[factors]]; add at least one (or run one setting over several seeds with [design] type = \"{}\")",
+            source.path.display(),
+            super::design::ONE_SETTING
+        ),
+        _ => {}
     }
     let mut names: BTreeMap<&str, usize> = BTreeMap::new();
     let mut targets: BTreeMap<&str, &str> = BTreeMap::new();

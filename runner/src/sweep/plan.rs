@@ -92,6 +92,26 @@ pub fn fnv1a(parts: &[&str]) -> String {
     format!("{h:016x}")
 }
 
+/// The sweep text as if `[design] replicates` were 1: runs are numbered replicate-major (all
+/// of replicate 1, then all of replicate 2, ...; run k has seed `seed + k - 1`), so a sweep
+/// run again with more replicates keeps every run it has and adds the new seeds. The rest of
+/// the text, comments included, is kept as written (toml_edit round-trips it), so a sweep
+/// with one replicate keeps the fingerprint it had.
+fn without_replicates(text: &str) -> String {
+    let Ok(mut doc) = text.parse::<toml_edit::DocumentMut>() else {
+        return text.to_string();
+    };
+    let Some(design) = doc.get_mut("design").and_then(|d| d.as_table_like_mut()) else {
+        return text.to_string();
+    };
+    if let Some(v) = design.get_mut("replicates").and_then(|v| v.as_value_mut()) {
+        let decor = v.decor().clone();
+        *v = toml_edit::Value::from(1i64);
+        *v.decor_mut() = decor;
+    }
+    doc.to_string()
+}
+
 impl Plan {
     /// Reads the sweep at `path`, or the embedded demo when `None`, and checks every run.
     pub fn load(path: Option<&Path>) -> Result<Plan> {
@@ -304,7 +324,7 @@ impl Plan {
             title,
             factors: factors_out,
             runs,
-            fingerprint: fnv1a(&[&source.text, &scene.text]),
+            fingerprint: fnv1a(&[&without_replicates(&source.text), &scene.text]),
             scene,
             fixed: sweep
                 .fixed
@@ -521,6 +541,17 @@ impl Plan {
             "scene {}, {} thread(s) per run\n",
             self.scene.origin, self.threads
         )?;
+        if self.factors.is_empty() {
+            // One setting over several seeds: the setting is the fixed values.
+            for (target, value) in &self.fixed {
+                writeln!(out, "fixed  {target} = {value}")?;
+            }
+            writeln!(out, "\n{:>4}  {:>4}  {:>6}", "run", "rep", "seed")?;
+            for r in &self.runs {
+                writeln!(out, "{:>4}  {:>4}  {:>6}", r.id, r.replicate, r.seed)?;
+            }
+            return Ok(());
+        }
         let nw = self
             .factors
             .iter()
@@ -635,4 +666,24 @@ pub fn num(x: f64) -> String {
     let s = format!("{x:.6}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".into() } else { s.to_string() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::without_replicates;
+
+    /// The fingerprint leaves out the replicate count and nothing else: a sweep with one
+    /// replicate (or none given) keeps its text, hence the fingerprint older builds gave it.
+    #[test]
+    fn the_identity_text_is_the_sweep_with_one_replicate() {
+        let one = "[design]\ntype = \"full_factorial\"\nreplicates = 1  # one\nseed = 3\n";
+        assert_eq!(without_replicates(one), one);
+        let none = "# no replicates key\n[design]\ntype = \"sobol\"\nruns = 8\n";
+        assert_eq!(without_replicates(none), none);
+        let five = one.replace("replicates = 1", "replicates = 5");
+        assert_eq!(without_replicates(&five), one);
+        // Any other change still counts.
+        let other_seed = five.replace("seed = 3", "seed = 4");
+        assert_ne!(without_replicates(&other_seed), one);
+    }
 }

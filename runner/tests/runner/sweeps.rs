@@ -411,3 +411,96 @@ fn two_thread_runs_take_two_cores_and_give_the_same_results() {
     }
     let _ = std::fs::remove_dir_all(&base);
 }
+
+/// `[design] type = "replicates"`: one setting over several seeds, its scatter printed; run
+/// again with more replicates, the runs done stay (the same bits) and only the new seeds run.
+#[test]
+fn one_setting_over_several_seeds_grows_by_the_new_seeds_only() {
+    let base = std::env::temp_dir().join(format!("tilth-seeds-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let text = std::fs::read_to_string(sweeps("tiny_seeds.toml")).unwrap();
+    let scene = sweeps("tiny_scene.toml");
+    let text = text.replace(
+        "\"tiny_scene.toml\"",
+        &format!("{:?}", scene.display().to_string()),
+    );
+    let file = base.join("seeds.toml");
+    let out = base.join("out");
+    let run = |replicates: usize| {
+        std::fs::write(
+            &file,
+            text.replace("replicates = 3", &format!("replicates = {replicates}")),
+        )
+        .unwrap();
+        let o = tilth()
+            .args(["sweep", "run", "--cores", "1", "--out"])
+            .arg(&out)
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (stdout, log) = run(3);
+    let first = csv(&out.join("results.csv"));
+    assert_eq!(first.len(), 3);
+    let seeds: Vec<&str> = first.iter().map(|r| r["seed"].as_str()).collect();
+    assert_eq!(seeds, ["21", "22", "23"]);
+    // No factor columns: the run's settings are the fixed values.
+    assert!(!first[0].contains_key("friction"), "{:?}", first[0]);
+    assert_eq!(
+        log.lines().filter(|l| l.contains("] run ")).count(),
+        3,
+        "{log}"
+    );
+    assert!(log.contains("(seed 21)"), "{log}");
+    // The printed scatter is the mean, sd and s.e. of the table's angles.
+    let angles: Vec<f64> = first
+        .iter()
+        .map(|r| r["repose_angle_deg"].parse().unwrap())
+        .collect();
+    let n = angles.len() as f64;
+    let mean = angles.iter().sum::<f64>() / n;
+    let sd = (angles.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("repose_angle_deg over 3 seeds: "))
+        .unwrap_or_else(|| panic!("no scatter line: {stdout}"));
+    let field = |name: &str| -> f64 {
+        line.split(&format!("{name} "))
+            .nth(1)
+            .and_then(|s| s.split([',', ' ']).next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("no {name} in {line}"))
+    };
+    assert!((field("mean") - mean).abs() <= 1e-5 * mean.abs(), "{line}");
+    assert!((field("sd") - sd).abs() <= 1e-5 * sd.max(1e-9), "{line}");
+    assert!(
+        (field("s.e.") - sd / n.sqrt()).abs() <= 1e-5 * sd.max(1e-9),
+        "{line}"
+    );
+    // Five replicates later: two new runs (seeds 24 and 25), the first three untouched.
+    let (_, log) = run(5);
+    assert_eq!(
+        log.lines().filter(|l| l.contains("] run ")).count(),
+        2,
+        "{log}"
+    );
+    let grown = csv(&out.join("results.csv"));
+    assert_eq!(grown.len(), 5);
+    assert_eq!(grown[3]["seed"], "24");
+    assert_eq!(grown[4]["seed"], "25");
+    for (a, b) in first.iter().zip(&grown) {
+        assert_eq!(a["repose_angle_deg"], b["repose_angle_deg"]);
+        assert_eq!(
+            a["wall_seconds"], b["wall_seconds"],
+            "run {} ran again",
+            a["run"]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&base);
+}
