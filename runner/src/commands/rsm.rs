@@ -88,7 +88,9 @@ pub struct ModelArgs {
     /// column names).
     #[arg(long, value_delimiter = ',')]
     pub names: Vec<String>,
-    /// Only rows where a column has a value, e.g. `moisture_pct=6` (repeatable).
+    /// Only rows where a column has a value, `moisture_pct=6`, or lies in a closed range,
+    /// `tau_c=200000:400000` (either end may be left out: `tau_c=:400000`); repeatable, all
+    /// must hold.
     #[arg(long = "where")]
     pub filters: Vec<String>,
     /// Add the centre points' curvature term (screening designs).
@@ -371,21 +373,12 @@ fn load(m: &ModelArgs) -> Result<Data> {
         }
     }
     for f in &m.filters {
-        let (col, value) = f
-            .split_once('=')
-            .with_context(|| format!("--where {f:?}: expected COLUMN=VALUE"))?;
-        let cells = table.text(col.trim())?;
-        let want = value.trim();
-        let keep: Vec<bool> = cells
-            .iter()
-            .map(|c| {
-                c == want
-                    || matches!((c.parse::<f64>(), want.parse::<f64>()), (Ok(a), Ok(b)) if a == b)
-            })
-            .collect();
+        let (col, cond) = parse_where(f)?;
+        let cells = table.text(col)?;
+        let keep: Vec<bool> = cells.iter().map(|c| cond.holds(c)).collect();
         table = table.filter(&keep);
         if table.rows.is_empty() {
-            bail!("{}: no row has {col} = {want}", m.csv.display());
+            bail!("{}: no row has {col} {}", m.csv.display(), cond.describe());
         }
     }
     let ranges = parse_ranges(&m.ranges, &m.factors, "--ranges")?;
@@ -397,6 +390,71 @@ fn load(m: &ModelArgs) -> Result<Data> {
         data = data.renamed(&m.names)?;
     }
     Ok(data)
+}
+
+/// What `--where COLUMN=...` asks of a cell.
+#[derive(Debug, PartialEq)]
+enum Where {
+    /// `COLUMN=VALUE`: the same text, or the same number (`6` matches `6.0`).
+    Equal(String),
+    /// `COLUMN=LO:HI`, either end optional: a number within the closed range.
+    Within(Option<f64>, Option<f64>),
+}
+
+impl Where {
+    fn holds(&self, cell: &str) -> bool {
+        let x = cell.trim().parse::<f64>().ok();
+        match self {
+            Where::Equal(want) => {
+                cell == want || matches!((x, want.parse::<f64>()), (Some(a), Ok(b)) if a == b)
+            }
+            Where::Within(lo, hi) => {
+                x.is_some_and(|x| lo.is_none_or(|lo| x >= lo) && hi.is_none_or(|hi| x <= hi))
+            }
+        }
+    }
+
+    fn describe(&self) -> String {
+        match self {
+            Where::Equal(v) => format!("= {v}"),
+            Where::Within(lo, hi) => format!(
+                "in [{}, {}]",
+                lo.map_or("-inf".into(), |v| v.to_string()),
+                hi.map_or("inf".into(), |v| v.to_string())
+            ),
+        }
+    }
+}
+
+/// `COLUMN=VALUE` or `COLUMN=LO:HI` (see `--where`).
+fn parse_where(f: &str) -> Result<(&str, Where)> {
+    let (col, value) = f
+        .split_once('=')
+        .with_context(|| format!("--where {f:?}: expected COLUMN=VALUE or COLUMN=LO:HI"))?;
+    let (col, value) = (col.trim(), value.trim());
+    let Some((lo, hi)) = value.split_once(':') else {
+        return Ok((col, Where::Equal(value.to_string())));
+    };
+    let end = |s: &str| -> Result<Option<f64>> {
+        let s = s.trim();
+        if s.is_empty() {
+            return Ok(None);
+        }
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            _ => bail!(
+                "--where {f:?}: {s:?} is not a number (COLUMN=LO:HI takes numbers; either end may be left out)"
+            ),
+        }
+    };
+    let (lo, hi) = (end(lo)?, end(hi)?);
+    match (lo, hi) {
+        (None, None) => bail!("--where {f:?}: a range needs at least one end, LO:HI"),
+        (Some(a), Some(b)) if a > b => {
+            bail!("--where {f:?}: the range's low end {a} is above its high end {b}")
+        }
+        _ => Ok((col, Where::Within(lo, hi))),
+    }
 }
 
 fn parse_ranges(

@@ -284,3 +284,66 @@ fn unfinished_runs_are_left_out() {
     // The mean of the five finished runs, not the failed run's 99.
     assert!((v["mean"].as_f64().unwrap() - 13.1 / 5.0).abs() < 1e-12);
 }
+
+/// `--where COLUMN=LO:HI` keeps the rows inside a closed range (either end open), as a user
+/// fitting part of a curve needs; a malformed range is refused with what it takes.
+#[test]
+fn where_takes_a_range_of_a_column() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-where");
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("curve.csv");
+    // y = 2 x on x <= 400, flat above: a line fitted to the first part has slope 2 exactly.
+    std::fs::write(
+        &csv,
+        "tau,y\n100,200\n200,400\n300,600\n400,800\n500,810\n600,805\n",
+    )
+    .unwrap();
+    let fit = |filter: &str| {
+        tilth(&[
+            "rsm",
+            "fit",
+            csv.to_str().unwrap(),
+            "--response",
+            "y",
+            "--factors",
+            "tau",
+            "--model",
+            "linear",
+            "--where",
+            filter,
+            "--json",
+        ])
+    };
+    for (filter, runs, mean) in [
+        ("tau=100:400", 4, 500.0),
+        ("tau=:400", 4, 500.0),
+        ("tau=200:", 5, (400.0 + 600.0 + 800.0 + 810.0 + 805.0) / 5.0),
+    ] {
+        let out = fit(filter);
+        assert!(
+            out.status.success(),
+            "{filter}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["runs"], runs, "{filter}");
+        assert!(
+            (v["mean"].as_f64().unwrap() - mean).abs() < 1e-9,
+            "{filter}: {v}"
+        );
+    }
+    // On the straight part the fit is exact: R^2 = 1.
+    let v: serde_json::Value = serde_json::from_slice(&fit("tau=100:400").stdout).unwrap();
+    assert!((v["r2"].as_f64().unwrap() - 1.0).abs() < 1e-12, "{v}");
+    for (filter, words) in [
+        ("tau=500:100", "low end 500 is above its high end 100"),
+        ("tau=a:400", "\"a\" is not a number"),
+        ("tau=:", "a range needs at least one end"),
+        ("tau=700:800", "no row has tau in [700, 800]"),
+    ] {
+        let out = fit(filter);
+        assert_eq!(out.status.code(), Some(2), "{filter}");
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(e.contains(words), "{filter}: {e}");
+    }
+}
