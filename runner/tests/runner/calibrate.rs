@@ -1,15 +1,14 @@
 //! `tilth calibrate` end to end at the coarse preset, one moisture, one seed: the runs, the
 //! ridge statement, the uncertainty and a calibrated model file that the lab accepts.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::tilth_in_root as tilth;
 
-#[test]
-fn calibrate_repose_at_one_moisture() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-repose");
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = tilth(&[
+/// `tilth calibrate` of the repose angle at 6 % moisture on the coarse funnel, on both cores,
+/// with `options` (parameters, seeds, checks) into `dir`; its calibration.json.
+fn calibrate_repose_at_6(dir: &Path, options: &[&str]) -> serde_json::Value {
+    let mut args = vec![
         "calibrate",
         "--model",
         "models/li2022.toml",
@@ -17,16 +16,9 @@ fn calibrate_repose_at_one_moisture() {
         "data/li2022/measurements.csv",
         "--test",
         "repose",
-        "--param",
-        "soil-soil.rolling_friction=0.05:0.45",
-        "--param",
-        "soil-soil.surface_energy=0.05:1.0",
-        "--seeds",
-        "1",
-        "--check-seeds",
-        "2",
-        "--refine",
-        "0",
+    ];
+    args.extend_from_slice(options);
+    args.extend_from_slice(&[
         "--coarse",
         "--where",
         "moisture_pct=6",
@@ -34,16 +26,36 @@ fn calibrate_repose_at_one_moisture() {
         "2",
         "--quiet",
         "--out",
-        dir.to_str().unwrap(),
     ]);
+    args.push(dir.to_str().unwrap());
+    let out = tilth(&args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("calibration.json")).unwrap())
-            .unwrap();
+    serde_json::from_str(&std::fs::read_to_string(dir.join("calibration.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn calibrate_repose_at_one_moisture() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-repose");
+    let _ = std::fs::remove_dir_all(&dir);
+    let v = calibrate_repose_at_6(
+        &dir,
+        &[
+            "--param",
+            "soil-soil.rolling_friction=0.05:0.45",
+            "--param",
+            "soil-soil.surface_energy=0.05:1.0",
+            "--seeds",
+            "1",
+            "--check-seeds",
+            "2",
+            "--refine",
+            "0",
+        ],
+    );
     let c = &v["conditions"][0];
     assert_eq!(c["measured"], 35.53);
     // 3 x 3 factorial + 2 centre points, one seed each; then two runs at the chosen setting.
@@ -404,43 +416,23 @@ fn a_joint_parameter_one_test_cannot_take_is_refused_before_any_run() {
 fn a_check_takes_seeds_until_its_mean_is_precise() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("calibrate-check-se");
     let _ = std::fs::remove_dir_all(&dir);
-    let out = tilth(&[
-        "calibrate",
-        "--model",
-        "models/li2022.toml",
-        "--data",
-        "data/li2022/measurements.csv",
-        "--test",
-        "repose",
-        "--param",
-        "soil-soil.rolling_friction=0.05:0.45",
-        "--seeds",
-        "1",
-        "--check-seeds",
-        "1",
-        "--check-se",
-        "1e-6",
-        "--max-check-seeds",
-        "3",
-        "--refine",
-        "0",
-        "--coarse",
-        "--where",
-        "moisture_pct=6",
-        "--cores",
-        "2",
-        "--quiet",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let v = calibrate_repose_at_6(
+        &dir,
+        &[
+            "--param",
+            "soil-soil.rolling_friction=0.05:0.45",
+            "--seeds",
+            "1",
+            "--check-seeds",
+            "1",
+            "--check-se",
+            "1e-6",
+            "--max-check-seeds",
+            "3",
+            "--refine",
+            "0",
+        ],
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("calibration.json")).unwrap())
-            .unwrap();
     assert_eq!(v["check_se_pct"], 1e-6);
     assert_eq!(v["max_check_seeds"], 3);
     let values: Vec<f64> = v["conditions"][0]["iterations"][0]["values"]

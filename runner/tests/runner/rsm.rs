@@ -247,18 +247,23 @@ fn refusals_name_the_problem() {
     );
 }
 
+/// `text` as `results.csv` in a fresh test directory `name`.
+fn table_in(name: &str, text: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("results.csv");
+    std::fs::write(&csv, text).unwrap();
+    csv
+}
+
 /// A sweep's results table: runs that did not finish are left out, with a warning naming
 /// their lines.
 #[test]
 fn unfinished_runs_are_left_out() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-status");
-    std::fs::create_dir_all(&dir).unwrap();
-    let csv = dir.join("results.csv");
-    std::fs::write(
-        &csv,
+    let csv = table_in(
+        "rsm-status",
         "run,a,b,status,y\n1,-1,-1,done,1\n2,1,-1,done,3\n3,-1,1,done,2\n4,1,1,done,4.5\n5,0,0,failed,99\n6,0,0,done,2.6\n",
-    )
-    .unwrap();
+    );
     let out = tilth(&[
         "rsm",
         "fit",
@@ -289,15 +294,11 @@ fn unfinished_runs_are_left_out() {
 /// fitting part of a curve needs; a malformed range is refused with what it takes.
 #[test]
 fn where_takes_a_range_of_a_column() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rsm-where");
-    std::fs::create_dir_all(&dir).unwrap();
-    let csv = dir.join("curve.csv");
     // y = 2 x on x <= 400, flat above: a line fitted to the first part has slope 2 exactly.
-    std::fs::write(
-        &csv,
+    let csv = table_in(
+        "rsm-where",
         "tau,y\n100,200\n200,400\n300,600\n400,800\n500,810\n600,805\n",
-    )
-    .unwrap();
+    );
     let fit = |filter: &str| {
         tilth(&[
             "rsm",
