@@ -41,14 +41,62 @@ fn legend<'a, 'b: 'a>(
     chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     what: &'static str,
 ) -> Result<(), RsmError> {
+    legend_at(chart, what, SeriesLabelPosition::UpperLeft)
+}
+
+fn legend_at<'a, 'b: 'a>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    what: &'static str,
+    position: SeriesLabelPosition,
+) -> Result<(), RsmError> {
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(position)
         .label_font((FONT, 12))
         .background_style(WHITE)
         .border_style(BLACK)
         .draw()
         .map_err(err(what))
+}
+
+/// The corner of the plot area `[x0, x1] x [y0, y1]` holding the fewest of `points`, for the
+/// legend (a box of about 45 % of the width and 30 % of the height), so that it does not
+/// cover the data or a target's label. Ties go in the order upper left, upper right, lower
+/// left, lower right.
+fn quietest_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let (w, h) = (x.1 - x.0, y.1 - y.0);
+    let corners = [
+        (SeriesLabelPosition::UpperLeft, true, true),
+        (SeriesLabelPosition::UpperRight, false, true),
+        (SeriesLabelPosition::LowerLeft, true, false),
+        (SeriesLabelPosition::LowerRight, false, false),
+    ];
+    let count = |left: bool, upper: bool| {
+        points
+            .iter()
+            .filter(|(px, py)| {
+                let in_x = if left {
+                    *px <= x.0 + 0.45 * w
+                } else {
+                    *px >= x.1 - 0.45 * w
+                };
+                let in_y = if upper {
+                    *py >= y.1 - 0.3 * h
+                } else {
+                    *py <= y.0 + 0.3 * h
+                };
+                in_x && in_y
+            })
+            .count()
+    };
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperLeft);
+    for (pos, left, upper) in corners {
+        let n = count(left, upper);
+        if n < best.0 {
+            best = (n, pos);
+        }
+    }
+    best.1
 }
 
 /// Contour plot of the surface over the solution's two free factors (the others at their
@@ -402,7 +450,24 @@ pub fn response_curve_checked_svg(
                 )])
                 .map_err(err(WHAT))?;
         }
-        legend(&mut chart, WHAT)?;
+        // The legend goes where it covers least: the curve and its band, the runs, the
+        // checks, and each target's label (drawn from the left edge along the target).
+        let mut occupied: Vec<(f64, f64)> = curve
+            .iter()
+            .flat_map(|c| (0..=4).map(move |k| (c.0, c.1 - c.2 + 0.5 * c.2 * k as f64)))
+            .chain(runs.iter().copied())
+            .chain(
+                checks
+                    .iter()
+                    .flat_map(|c| c.values.iter().map(move |v| (c.x, *v))),
+            )
+            .collect();
+        for s in solutions {
+            occupied
+                .extend((0..=20).map(|k| (xlo + (xhi - xlo) * 0.4 * k as f64 / 20.0, s.target)));
+        }
+        let corner = quietest_corner(&occupied, (xlo, xhi), (lo - pad, hi + pad));
+        legend_at(&mut chart, WHAT, corner)?;
         root.present().map_err(err(WHAT))?;
     }
     Ok(Some(svg))
@@ -659,4 +724,31 @@ pub fn predicted_vs_actual_svg(a: &Anova) -> Result<String, RsmError> {
         root.present().map_err(err(WHAT))?;
     }
     Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::quietest_corner;
+    use plotters::prelude::SeriesLabelPosition as P;
+
+    /// A rising curve with its target's label along the top left (the repose curve at 12 %,
+    /// where the label sat under the legend): the legend leaves the upper left for the lower
+    /// right, the one corner without points.
+    #[test]
+    fn the_legend_goes_to_the_corner_with_fewest_points() {
+        let mut pts: Vec<(f64, f64)> = (0..=10)
+            .map(|k| (k as f64 / 10.0, 40.0 + k as f64 / 2.0))
+            .collect();
+        pts.extend((0..=8).map(|k| (k as f64 / 20.0, 44.8)));
+        let at = quietest_corner(&pts, (0.0, 1.0), (40.0, 45.0));
+        assert!(matches!(at, P::LowerRight), "{at:?}");
+        // Nothing anywhere: the usual upper left.
+        assert!(matches!(
+            quietest_corner(&[], (0.0, 1.0), (0.0, 1.0)),
+            P::UpperLeft
+        ));
+        // Only the upper left taken: the upper right.
+        let at = quietest_corner(&[(0.1, 0.9)], (0.0, 1.0), (0.0, 1.0));
+        assert!(matches!(at, P::UpperRight), "{at:?}");
+    }
 }
