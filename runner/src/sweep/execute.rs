@@ -435,13 +435,10 @@ pub fn scatter_lines(plan: &Plan, table: &[Vec<String>]) -> Vec<String> {
             .filter(|r| status.is_some_and(|s| r[s] == Status::Done.as_str()))
             .filter_map(|r| r[col].parse::<f64>().ok())
             .collect();
-        if values.len() < 2 {
+        let (mean, Some(sd)) = crate::commands::compare::mean_sd(&values) else {
             continue;
-        }
-        let n = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / n;
-        let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        let se = sd / n.sqrt();
+        };
+        let se = sd / (values.len() as f64).sqrt();
         let rel = if mean != 0.0 {
             format!(" ({:.2} % of the mean)", 100.0 * se / mean.abs())
         } else {
