@@ -285,7 +285,7 @@ impl LocalGrid {
     fn coords(&self, p: DVec3) -> Option<[usize; 3]> {
         let q = (p - self.lo) / self.cell;
         let ok = (0..3).all(|k| q[k] >= 0.0 && (q[k] as usize) < self.dims[k]);
-        ok.then(|| [q.x as usize, q.y as usize, q.z as usize])
+        ok.then_some([q.x as usize, q.y as usize, q.z as usize])
     }
 
     fn insert(&mut self, p: DVec3, r: f64) {

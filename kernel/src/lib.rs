@@ -19,6 +19,10 @@
 //! - [`timestep`], [`step_check`]: the step a scene may take, before a run and from its
 //!   contacts during one.
 
+// Range checks are written `!(x > 0.0)` on purpose: the negation also refuses NaN, which
+// `x <= 0.0` would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod contact;
 pub mod error;
 pub mod factory;

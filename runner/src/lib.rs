@@ -6,6 +6,10 @@
 //! Exit codes: 0 success, 1 the run failed (the kernel stopped it: [`KernelError::BlowUp`]),
 //! 2 bad input or usage. A closed stdout (broken pipe) is not an error.
 
+// Range checks are written `!(x > 0.0)` on purpose: the negation also refuses NaN, which
+// `x <= 0.0` would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod cli;
 pub mod commands;
 pub mod config;

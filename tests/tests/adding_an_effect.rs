@@ -31,7 +31,7 @@ fn the_page_shows_the_compiled_law_and_its_test() {
     ] {
         let text = std::fs::read_to_string(root.join(file)).unwrap();
         assert!(
-            shown.iter().any(|b| *b == text),
+            shown.contains(&text),
             "docs/adding-an-effect.md does not show {file} as it is"
         );
     }

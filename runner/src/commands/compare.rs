@@ -348,7 +348,7 @@ pub fn simulate(
         for (i, m) in rows.iter().enumerate().filter(|(_, m)| &m.test == test) {
             let (sims, problems) = by_row.entry(m.row).or_default();
             for run in plan.runs.iter().filter(|r| r.std == group[i]) {
-                let s = read_summary(&run_dir(&dir, run.id));
+                let s = read_summary(&run_dir(dir, run.id));
                 let v = s.as_ref().and_then(|s| observed(s, &m.observable));
                 match (v, s) {
                     (Some(v), Some(s)) if s.status == Status::Done => sims.push(v),

@@ -38,7 +38,7 @@ impl SizeMix {
             );
         }
         let ratio = p.fine_diameter_ratio.unwrap_or(DEFAULT_FINE_RATIO);
-        if !(ratio >= 0.3 && ratio < 1.0) {
+        if !(0.3..1.0).contains(&ratio) {
             bail!(
                 "{path}: particles.fine_diameter_ratio = {ratio} is out of range: allowed [0.3, 1)"
             );
