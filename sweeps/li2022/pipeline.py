@@ -3,6 +3,7 @@
 
     sweeps/li2022/pipeline.py OUT [--cores N] [--replicates N] [--bonds MODEL]
                               [--bond-replicates N] [--repose-model MODEL]
+                              [--repose-param PAIR.KEY=LO:HI]
                               [--surface-seeds N] [--check-seeds N]
                               [--stages STAGE,...] [--tilth PATH]
 
@@ -352,7 +353,7 @@ class Pipeline:
         self.p(f"Worst error: tilth {worst:.2f} %, the study 4.72 % (its table 11 at 12 %).")
 
     # 6. The angle calibrated on the quiet funnel heap ---------------------------------------
-    def calibrate_repose(self, model, surface_seeds, check_seeds):
+    def calibrate_repose(self, model, surface_seeds, check_seeds, param=REPOSE_PARAM):
         """`tilth calibrate` per moisture on the quiet heap, then fresh seeds through compare.
 
         The study's route above (one run per design point) cannot hold 2 % at the coarse scale:
@@ -370,7 +371,7 @@ class Pipeline:
         cal = self.out / "repose-calibration"
         measurements = REPO / "data" / "li2022" / "measurements.csv"
         self.run("calibrate", "--model", model, "--data", measurements, "--test", "repose",
-                 "--param", REPOSE_PARAM, "--seeds", surface_seeds, "--check-seeds", check_seeds,
+                 "--param", param, "--seeds", surface_seeds, "--check-seeds", check_seeds,
                  "--refine", 2, "--coarse", *sets, "--out", cal, "--cores", self.cores)
         calibration = json.loads((cal / "calibration.json").read_text())
         self.run("compare", "--model", cal / "model.toml", "--data", measurements,
@@ -382,7 +383,7 @@ class Pipeline:
         shown = Path(model).resolve()
         shown = shown.relative_to(REPO) if shown.is_relative_to(REPO) else shown
         self.h("The angle calibrated on the quiet funnel heap")
-        self.p(f"`tilth calibrate` from `{shown}`, the free parameter `{REPOSE_PARAM}` per "
+        self.p(f"`tilth calibrate` from `{shown}`, the free parameter `{param}` per "
                f"moisture, {surface_seeds} seeds per surface setting and {check_seeds} per direct "
                f"check; then `tilth compare` with the calibrated model and {self.replicates} fresh "
                f"seeds per moisture (from {VALIDATION_FIRST_SEED}). The funnel: "
@@ -712,6 +713,10 @@ def main():
     ap.add_argument("--repose-model",
                     default=str(REPO / "docs" / "li2022-repose-calibration" / "model.toml"),
                     help="starting model of the repose-calibration stage")
+    ap.add_argument("--repose-param", default=REPOSE_PARAM,
+                    help="free parameter and range of the repose-calibration stage, PAIR.KEY=LO:HI "
+                         f"(default {REPOSE_PARAM}; the twisting model's calibration takes "
+                         "soil-soil.rolling_friction=0.05:0.6)")
     ap.add_argument("--surface-seeds", type=int, default=2,
                     help="seeds per surface setting in the repose-calibration stage")
     ap.add_argument("--check-seeds", type=int, default=10,
@@ -735,6 +740,9 @@ def main():
         ap.error(f"--bonds: {args.bonds} is not a file")
     if "repose-calibration" in stages and not Path(args.repose_model).is_file():
         ap.error(f"--repose-model: {args.repose_model} is not a file")
+    if not re.fullmatch(r"[\w-]+\.\w+=[-+.\deE]+:[-+.\deE]+", args.repose_param):
+        ap.error(f"--repose-param: `{args.repose_param}` is not PAIR.KEY=LO:HI, "
+                 f"e.g. {REPOSE_PARAM}")
     pipe = Pipeline(args)
     if "repose" in stages:
         pipe.screening()
@@ -743,7 +751,8 @@ def main():
         chosen = pipe.solve(nxt)
         pipe.validate(chosen)
     if "repose-calibration" in stages:
-        pipe.calibrate_repose(args.repose_model, args.surface_seeds, args.check_seeds)
+        pipe.calibrate_repose(args.repose_model, args.surface_seeds, args.check_seeds,
+                              args.repose_param)
     if "repose-refinement" in stages:
         pipe.refine_repose(args.surface_seeds, args.refinement_check_seeds, args.refinement_seeds)
     if "bonds" in stages:

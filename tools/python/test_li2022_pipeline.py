@@ -268,6 +268,19 @@ class ReposeCalibrationStage(unittest.TestCase):
         self.assertTrue(self.line.startswith("3 of 4 moistures within 2 %"), self.line)
         self.assertIn("worst error tilth 3.10 %", self.line)
 
+    def test_another_free_parameter_reaches_calibrate_and_the_report(self):
+        # The twisting model's calibration (docs/li2022-repose-calibration.md) widens the range.
+        self.calls.clear()
+        self.pipe.report.clear()
+        param = "soil-soil.rolling_friction=0.05:0.6"
+        self.pipe.calibrate_repose(REPO / "docs" / "li2022-repose-calibration" / "twisting" / "model.toml",
+                                   2, 10, param)
+        cal = self.calls[0]
+        self.assertEqual(cal[0], "calibrate")
+        self.assertEqual(cal[cal.index("--param") + 1], param)
+        self.assertTrue(cal[cal.index("--model") + 1].endswith("twisting/model.toml"))
+        self.assertIn(f"the free parameter `{param}`", "\n".join(self.pipe.report))
+
 
 # The repose-refinement stage: a calibration whose validation missed at 6 % (inside the range,
 # two checks with the same seeds), at 9 % (one check only: no slope) and at 12 % (rolling
