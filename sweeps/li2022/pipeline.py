@@ -107,6 +107,9 @@ class Pipeline:
         self.tilth = args.tilth
         self.cores = str(args.cores)
         self.replicates = args.replicates
+        # The repose stages' free parameter and range: the calibration's, and the
+        # refinement's (which refines that calibration's settings within the same range).
+        self.repose_param = args.repose_param
         self.report = []
 
     def run(self, *argv, capture=None):
@@ -353,7 +356,7 @@ class Pipeline:
         self.p(f"Worst error: tilth {worst:.2f} %, the study 4.72 % (its table 11 at 12 %).")
 
     # 6. The angle calibrated on the quiet funnel heap ---------------------------------------
-    def calibrate_repose(self, model, surface_seeds, check_seeds, param=REPOSE_PARAM):
+    def calibrate_repose(self, model, surface_seeds, check_seeds):
         """`tilth calibrate` per moisture on the quiet heap, then fresh seeds through compare.
 
         The study's route above (one run per design point) cannot hold 2 % at the coarse scale:
@@ -371,7 +374,7 @@ class Pipeline:
         cal = self.out / "repose-calibration"
         measurements = REPO / "data" / "li2022" / "measurements.csv"
         self.run("calibrate", "--model", model, "--data", measurements, "--test", "repose",
-                 "--param", param, "--seeds", surface_seeds, "--check-seeds", check_seeds,
+                 "--param", self.repose_param, "--seeds", surface_seeds, "--check-seeds", check_seeds,
                  "--refine", 2, "--coarse", *sets, "--out", cal, "--cores", self.cores)
         calibration = json.loads((cal / "calibration.json").read_text())
         self.run("compare", "--model", cal / "model.toml", "--data", measurements,
@@ -383,7 +386,7 @@ class Pipeline:
         shown = Path(model).resolve()
         shown = shown.relative_to(REPO) if shown.is_relative_to(REPO) else shown
         self.h("The angle calibrated on the quiet funnel heap")
-        self.p(f"`tilth calibrate` from `{shown}`, the free parameter `{param}` per "
+        self.p(f"`tilth calibrate` from `{shown}`, the free parameter `{self.repose_param}` per "
                f"moisture, {surface_seeds} seeds per surface setting and {check_seeds} per direct "
                f"check; then `tilth compare` with the calibrated model and {self.replicates} fresh "
                f"seeds per moisture (from {VALIDATION_FIRST_SEED}). The funnel: "
@@ -443,8 +446,8 @@ class Pipeline:
         cal = self.out / "repose-calibration"
         calibration = json.loads((cal / "calibration.json").read_text())
         rows = json.loads((self.out / "repose-validation" / "compare.json").read_text())["rows"]
-        lo, hi = (float(v) for v in REPOSE_PARAM.split("=")[1].split(":"))
-        key = REPOSE_PARAM.split("=")[0].split(".")[1]
+        lo, hi = (float(v) for v in self.repose_param.split("=")[1].split(":"))
+        key = self.repose_param.split("=")[0].split(".")[1]
         ref = self.out / "repose-refinement"
         ref.mkdir(parents=True, exist_ok=True)
         sets = []
@@ -714,7 +717,7 @@ def main():
                     default=str(REPO / "docs" / "li2022-repose-calibration" / "model.toml"),
                     help="starting model of the repose-calibration stage")
     ap.add_argument("--repose-param", default=REPOSE_PARAM,
-                    help="free parameter and range of the repose-calibration stage, PAIR.KEY=LO:HI "
+                    help="free parameter and range of the repose-calibration and -refinement stages, PAIR.KEY=LO:HI "
                          f"(default {REPOSE_PARAM}; the twisting model's calibration takes "
                          "soil-soil.rolling_friction=0.05:0.6)")
     ap.add_argument("--surface-seeds", type=int, default=2,
@@ -751,8 +754,7 @@ def main():
         chosen = pipe.solve(nxt)
         pipe.validate(chosen)
     if "repose-calibration" in stages:
-        pipe.calibrate_repose(args.repose_model, args.surface_seeds, args.check_seeds,
-                              args.repose_param)
+        pipe.calibrate_repose(args.repose_model, args.surface_seeds, args.check_seeds)
     if "repose-refinement" in stages:
         pipe.refine_repose(args.surface_seeds, args.refinement_check_seeds, args.refinement_seeds)
     if "bonds" in stages:

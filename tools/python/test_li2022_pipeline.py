@@ -80,7 +80,8 @@ def stand_in(case, cores, replicates, fake):
     case.tmp = tempfile.TemporaryDirectory()
     case.out = Path(case.tmp.name)
     args = type("Args", (), {"out": str(case.out), "tilth": "tilth", "cores": cores,
-                             "replicates": replicates})()
+                             "replicates": replicates,
+                             "repose_param": case.pipeline.REPOSE_PARAM})()
     case.pipe = case.pipeline.Pipeline(args)
     case.calls = []
 
@@ -273,8 +274,9 @@ class ReposeCalibrationStage(unittest.TestCase):
         self.calls.clear()
         self.pipe.report.clear()
         param = "soil-soil.rolling_friction=0.05:0.6"
+        self.pipe.repose_param = param
         self.pipe.calibrate_repose(REPO / "docs" / "li2022-repose-calibration" / "twisting" / "model.toml",
-                                   2, 10, param)
+                                   2, 10)
         cal = self.calls[0]
         self.assertEqual(cal[0], "calibrate")
         self.assertEqual(cal[cal.index("--param") + 1], param)
