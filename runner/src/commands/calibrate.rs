@@ -12,7 +12,10 @@
 //! 3. **Refine.** Direct runs at the chosen setting with `--seeds` fresh seeds (the same seeds
 //!    at every iteration: common random numbers); while the mean misses the measurement by
 //!    more than `--tolerance` %, a Newton step along the surface's gradient (at most a quarter
-//!    of each range), up to `--refine` times.
+//!    of each range), up to `--refine` times. With one free parameter, once the checks stand
+//!    at two settings or more, the step goes instead to where the line through every check
+//!    (weighted by runs) meets the measurement, when that line's slope has the surface's sign:
+//!    the checks measure the slope where the calibration is, the surface only guesses it.
 //! 4. **Uncertainty.** Linearised intervals (and the ridge direction when the data cannot
 //!    fix every parameter) and a posterior sample by sequential Monte Carlo on the surface,
 //!    the likelihood's spread being the fit's residual standard deviation.
@@ -40,7 +43,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
-use tilth_tools::calibrate::{Linearised, Posterior, linearised, smc};
+use tilth_tools::calibrate::{Check, Linearised, Posterior, linearised, next_from_checks, smc};
 use tilth_tools::rsm::plot::CheckRuns;
 use tilth_tools::rsm::{self, Anova, Data, FitOptions, Order, Table};
 
@@ -405,10 +408,37 @@ pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
                 active[c] = false;
                 continue;
             }
+            // With one parameter and checks at two settings or more, the step follows the
+            // line through the checks themselves (measured where the calibration is, on the
+            // same seeds) rather than the surface's slope there; see `next_from_checks`.
+            let miss = mean - target;
+            let from_checks = if params.len() == 1 {
+                let checks: Vec<Check> = iterations[c]
+                    .iter()
+                    .map(|i| Check {
+                        setting: i.setting[0],
+                        mean: i.mean,
+                        runs: i.values.len(),
+                    })
+                    .collect();
+                next_from_checks(&checks, target, g[0])
+            } else {
+                None
+            };
+            let step: Vec<f64> = match from_checks {
+                Some((x, slope)) => {
+                    if !args.quiet {
+                        eprintln!(
+                            "{}: the checks' line ({slope:.4} per unit) puts the target at {x:.6}",
+                            describe(&report[c].1)
+                        );
+                    }
+                    vec![x - settings[c][0]]
+                }
+                None => g.iter().map(|gi| -miss * gi / g2).collect(),
+            };
             // A trust region: the surface is a fit to noisy runs, so no step goes further than
             // a quarter of any parameter's range (half a coded unit).
-            let miss = mean - target;
-            let step: Vec<f64> = g.iter().map(|gi| -miss * gi / g2).collect();
             let worst = step
                 .iter()
                 .zip(&params)
