@@ -358,6 +358,11 @@ class ReposeRefinementStage(unittest.TestCase):
     def tearDown(self):
         self.tmp.cleanup()
 
+    def middle(self):
+        """The middle of the pipeline's rolling friction range (REPOSE_PARAM)."""
+        lo, hi = (float(v) for v in self.pipeline.REPOSE_PARAM.split("=")[1].split(":"))
+        return 0.5 * (lo + hi)
+
     def rolling(self, model):
         line = next(ln for ln in model.splitlines() if ln.startswith("rolling_friction"))
         return [float(v) for v in re.search(r"\by = \[([^\]]*)\]", line).group(1).split(",")]
@@ -370,14 +375,14 @@ class ReposeRefinementStage(unittest.TestCase):
         self.assertEqual(cal[cal.index("--check-seeds") + 1], "12")
         before = self.rolling((self.out / "repose-calibration" / "model.toml").read_text())
         start = self.rolling(self.starts[0])
-        self.assertEqual(start, before[:3] + [0.35])
+        self.assertEqual(start, before[:3] + [round(self.middle(), 6)])
 
     def test_the_moisture_inside_its_range_takes_one_newton_step_from_the_pooled_runs(self):
         # Pooled: the last check (35.0, 36.0) and the validation (34.0, 34.5): 34.875; slope
         # 50 per unit: 0.15 + (35.53 - 34.875) / 50 = 0.1631.
         final = self.rolling((self.out / "repose-refinement" / "model.toml").read_text())
         self.assertAlmostEqual(final[1], round(0.15 + (35.53 - 34.875) / 50, 4), places=9)
-        self.assertEqual(final[3], 0.35)
+        self.assertEqual(final[3], round(self.middle(), 6))
         self.assertIn("# surface energy calibrated",
                       (self.out / "repose-refinement" / "model.toml").read_text())
 
