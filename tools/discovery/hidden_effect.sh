@@ -8,11 +8,15 @@
 #   tools/discovery/hidden_effect.sh plastic_adhesion 0.05 runs/hidden-plastic
 #
 # The data: the funnel test at 3, 6, 9 and 12 % moisture, four readings each (fixed-base
-# cone angle, tray mass, flow rate, soil left in the funnel).
+# cone angle, tray mass, flow rate, soil left in the funnel), each value the mean of R_DATA
+# truth runs plus the injected noise. The error after the fit is printed against the data's
+# noise (the RMS of their `uncertainty`: the injected noise and the scatter of the truth's
+# mean) and against the injected noise alone.
 #
 # Environment: TILTH (the binary; default target/release/tilth), MODEL (default
-# models/li2022.toml), SCALE (default --coarse; empty: the study's scale), R (replicates per
-# run setting, default 4), NOISE (default below), FREE (the model's free parameter), CACHE
+# models/li2022.toml), SCALE (default --coarse; empty: the study's scale), R, R_DATA and
+# R_JUDGE (replicates) and NOISE (the injected noise) as setup.sh says, FREE (the model's
+# free parameter), CACHE
 # (the run cache, default OUT/cache: give several studies of one model the same cache and
 # they share the model's runs).
 set -euo pipefail
@@ -20,9 +24,9 @@ effect=$1 strength=$2 out=$3 seed=${4:-1}
 source "$(dirname "$0")/setup.sh"
 
 "$tilth" synth --truth "$model" --with "$effect=$strength" --conditions "$out/conditions.csv" \
-  --noise "$NOISE" --replicates "$R" --seed "$seed" --out "$out/data.csv" $SCALE --quiet --cache "$cache"
+  --noise "$NOISE" --replicates "$R_DATA" --seed "$seed" --out "$out/data.csv" $SCALE --quiet --cache "$cache"
 "$tilth" compare --model "$model" --data "$out/data.csv" --out "$out/1-compare" \
-  --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
+  --replicates "$R_JUDGE" $SCALE --quiet --cache "$cache" > /dev/null
 "$tilth" diagnose --model "$model" --data "$out/data.csv" --out "$out/2-diagnose" \
   --param "$FREE" --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
 # The first candidate's strength, free in [0, max(3 x its estimate, 2 x its step)] from the
@@ -41,23 +45,6 @@ echo "diagnose: first $name (strength $est, significant: $significant); hidden: 
   --param "$FREE" --param "candidate.$name=0:$hi@$est" \
   --replicates "$R" --iterations 3 $SCALE --quiet --cache "$cache" > /dev/null
 "$tilth" compare --model "$out/3-fit/model.toml" --data "$out/data.csv" --out "$out/4-compare" \
-  --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
+  --replicates "$R_JUDGE" $SCALE --quiet --cache "$cache" > /dev/null
 "$tilth" report "$out" > /dev/null
-python3 - "$out" <<'PY'
-import json, sys, math
-out = sys.argv[1]
-rows = json.load(open(f"{out}/1-compare/compare.json"))["rows"]
-noise = {}
-for r in rows:
-    noise.setdefault(r["observable"], []).append(r.get("uncertainty") or 0.0)
-before = json.load(open(f"{out}/1-compare/compare.json"))["observables"]
-after = json.load(open(f"{out}/4-compare/compare.json"))["observables"]
-d = json.load(open(f"{out}/2-diagnose/diagnosis.json"))["candidates"]
-print("rank  candidate  statistic  p  identifiable")
-for c in d:
-    print(f"  {c['name']:<18} {c['statistic']:8.2f}  {c['p_value']:.2g}  {c['identifiable']}")
-print("observable  RMSE before  RMSE after  noise (RMS uncertainty)  after/noise")
-for k in after:
-    u = math.sqrt(sum(x * x for x in noise[k]) / len(noise[k]))
-    print(f"  {k:<22} {before[k]['rmse']:9.3f} {after[k]['rmse']:9.3f} {u:9.3f} {after[k]['rmse'] / u:6.2f}")
-PY
+python3 "$(dirname "$0")/tables.py" --one "$out" "$NOISE"

@@ -2,7 +2,13 @@
 # environment and the measured conditions, the funnel test at 3, 6, 9 and 12 % moisture with
 # four readings each, written to OUT/conditions.csv.
 tilth=${TILTH:-target/release/tilth}
+# Replicates: R model runs per setting in diagnose and fit; R_DATA truth runs averaged into
+# each synthetic value and R_JUDGE model runs per condition in the two compares (both R unless
+# set: docs/discovery.md, "Judged against the injected noise alone", sets them to 16).
 R=${R:-4}
+R_DATA=${R_DATA:-$R}
+R_JUDGE=${R_JUDGE:-$R}
+# The injected noise (`tilth synth --noise`).
 NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%,funnel_residue_g=0.05}
 FREE=${FREE:-soil-soil.rolling_friction=0.05:0.45}
 model=${MODEL:-models/li2022.toml}

@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""The discovery proof's tables (docs/discovery.md, "The proof") from its output directory.
+
+    python3 tools/discovery/tables.py DIR [NOISE]
+    python3 tools/discovery/tables.py --one OUT [NOISE]
+
+DIR holds `hidden-<effect>/` (tools/discovery/hidden_effect.sh) and `null/` (null_study.sh),
+as the proof's test leaves them in target/tmp/discovery-proof; `--one` reads one
+hidden-effect study's OUT. NOISE is the injected noise the data were made with (default:
+tools/discovery/setup.sh's). The error after the fit is given against the data's noise (the
+RMS of their `uncertainty`: the injected noise and the scatter of the truth's mean, which
+the proof's test judges) and against the injected noise alone. Prints Markdown.
+"""
+import glob
+import json
+import math
+import os
+import re
+import sys
+
+READINGS = ["heap_cone_angle_deg", "tray_mass_g", "funnel_flow_rate_g_s", "funnel_residue_g"]
+HEADS = ["cone angle (deg)", "tray mass (g)", "flow rate (g/s)", "residue (g)"]
+
+
+def default_noise():
+    setup = open(os.path.join(os.path.dirname(__file__), "setup.sh")).read()
+    return re.search(r"NOISE=\$\{NOISE:-([^}]*)\}", setup).group(1)
+
+
+def injected(spec, observable, value):
+    s = spec[observable]
+    return float(s[:-1]) / 100 * abs(value) if s.endswith("%") else float(s)
+
+
+def load(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def rms(xs):
+    return math.sqrt(sum(x * x for x in xs) / len(xs))
+
+
+def hidden_tables(dirs, spec):
+    print("| hidden (strength) | ranked first | statistic | p (Holm) | estimated strength "
+          "| second (p) | fitted strength | chi^2 / dof after |")
+    print("|---|---|---|---|---|---|---|---|")
+    for d in dirs:
+        effect = os.path.basename(os.path.normpath(d))[len("hidden-"):]
+        source = open(f"{d}/data.csv").read()
+        strength = re.search(r"with [a-z_]+=([0-9.e-]+)", source).group(1)
+        c = load(f"{d}/2-diagnose/diagnosis.json")["candidates"]
+        fit = load(f"{d}/3-fit/fit.json")
+        k = next(i for i, p in enumerate(fit["parameters"]) if p["label"].startswith("candidate."))
+        print(f"| {effect} ({strength}) | {c[0]['name']} | {c[0]['statistic']:.1f} | {c[0]['p_value']:.2g} "
+              f"| {c[0]['strength']:.4f} | {c[1]['name']} ({c[1]['p_value']:.2g}) "
+              f"| {fit['estimate'][k]:.4f} | {fit['chi2']:.1f} / {fit['dof']} |")
+    print()
+    print("RMSE before -> after the fit (after / the data's noise, after / the injected noise):")
+    print()
+    print("| hidden | " + " | ".join(HEADS) + " |")
+    print("|---" * (len(HEADS) + 1) + "|")
+    worst = [0.0, 0.0]
+    for d in dirs:
+        rows = load(f"{d}/1-compare/compare.json")["rows"]
+        before = load(f"{d}/1-compare/compare.json")["observables"]
+        after = load(f"{d}/4-compare/compare.json")["observables"]
+        cells = []
+        for o in READINGS:
+            mine = [r for r in rows if r["observable"] == o]
+            ratios = [after[o]["rmse"] / rms([r["uncertainty"] for r in mine]),
+                      after[o]["rmse"] / rms([injected(spec, o, r["value"]) for r in mine])]
+            worst = [max(w, x) for w, x in zip(worst, ratios)]
+            cells.append(f"{before[o]['rmse']:.3g} -> {after[o]['rmse']:.3g} ({ratios[0]:.2f}, {ratios[1]:.2f})")
+        print(f"| {os.path.basename(os.path.normpath(d))[len('hidden-'):]} | " + " | ".join(cells) + " |")
+    print()
+    print(f"largest RMSE after: {worst[0]:.2f}x the data's noise, {worst[1]:.2f}x the injected noise")
+
+
+def null_table(root):
+    seeds = sorted(glob.glob(os.path.join(root, "null", "seed-*")), key=lambda p: int(p.rsplit("-", 1)[1]))
+    if not seeds:
+        return
+    print()
+    print("| seed | first candidate | statistic | p (Holm) |")
+    print("|---|---|---|---|")
+    flagged, smallest = 0, 1.0
+    for s in seeds:
+        c = load(f"{s}/diagnose/diagnosis.json")["candidates"]
+        flagged += any(x["significant"] for x in c)
+        smallest = min(smallest, c[0]["p_value"])
+        print(f"| {s.rsplit('-', 1)[1]} | {c[0]['name']} | {c[0]['statistic']:.2f} | {c[0]['p_value']:.3g} |")
+    print()
+    print(f"seeds with a significant candidate: {flagged} of {len(seeds)}; smallest corrected p: {smallest:.2g}")
+
+
+def main():
+    args = sys.argv[1:]
+    one = args[:1] == ["--one"]
+    args = args[1:] if one else args
+    if len(args) not in (1, 2):
+        sys.exit(__doc__)
+    spec = dict(p.split("=") for p in (args[1] if len(args) == 2 else default_noise()).split(","))
+    if one:
+        hidden_tables([args[0]], spec)
+    else:
+        hidden_tables(sorted(glob.glob(os.path.join(args[0], "hidden-*"))), spec)
+        null_table(args[0])
+
+
+if __name__ == "__main__":
+    main()
