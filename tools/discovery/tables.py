@@ -19,7 +19,7 @@ import re
 import sys
 
 READINGS = ["heap_cone_angle_deg", "tray_mass_g", "funnel_flow_rate_g_s", "funnel_residue_g"]
-HEADS = ["cone angle (deg)", "tray mass (g)", "flow rate (g/s)", "residue (g)"]
+HEADS = dict(zip(READINGS, ["cone angle (deg)", "tray mass (g)", "flow rate (g/s)", "residue (g)"]))
 
 
 def default_noise():
@@ -58,15 +58,17 @@ def hidden_tables(dirs, spec):
     print()
     print("RMSE before -> after the fit (after / the data's noise, after / the injected noise):")
     print()
-    print("| hidden | " + " | ".join(HEADS) + " |")
-    print("|---" * (len(HEADS) + 1) + "|")
+    present = {r["observable"] for d in dirs for r in load(f"{d}/1-compare/compare.json")["rows"]}
+    readings = [o for o in READINGS if o in present] + sorted(present - set(READINGS))
+    print("| hidden | " + " | ".join(HEADS.get(o, o) for o in readings) + " |")
+    print("|---" * (len(readings) + 1) + "|")
     worst = [0.0, 0.0]
     for d in dirs:
         rows = load(f"{d}/1-compare/compare.json")["rows"]
         before = load(f"{d}/1-compare/compare.json")["observables"]
         after = load(f"{d}/4-compare/compare.json")["observables"]
         cells = []
-        for o in READINGS:
+        for o in readings:
             mine = [r for r in rows if r["observable"] == o]
             ratios = [after[o]["rmse"] / rms([r["uncertainty"] for r in mine]),
                       after[o]["rmse"] / rms([injected(spec, o, r["value"]) for r in mine])]

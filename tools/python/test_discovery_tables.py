@@ -1,0 +1,90 @@
+#!/usr/bin/env python3
+"""Tests for tools/discovery/tables.py, the discovery proof's tables.
+
+    python3 -m unittest discover -s tools/python -p 'test_*.py' -v
+
+A hidden-effect study's output is made up here with known numbers, so that the two ratios of
+the error after the fit (to the data's noise and to the injected noise alone) and the
+relative noise (a percentage of each measured value) are checked against hand arithmetic.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import io
+import json
+import math
+import tempfile
+import unittest
+from contextlib import redirect_stdout
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def load_tables():
+    spec = importlib.util.spec_from_file_location("discovery_tables",
+                                                  REPO / "tools" / "discovery" / "tables.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def write_study(out: Path):
+    """A study with two readings at two moistures: the cone angle (absolute noise) and the
+    flow rate (relative noise)."""
+    rows = []
+    for m, cone, flow in [(3, 35.0, 400.0), (12, 42.0, 300.0)]:
+        rows.append({"observable": "heap_cone_angle_deg", "value": cone, "uncertainty": 1.0,
+                     "conditions": {"moisture_pct": m}})
+        rows.append({"observable": "funnel_flow_rate_g_s", "value": flow, "uncertainty": 10.0,
+                     "conditions": {"moisture_pct": m}})
+    for stage, cone, flow in [("1-compare", 3.0, 50.0), ("4-compare", 0.6, 9.0)]:
+        (out / stage).mkdir(parents=True)
+        obs = {"heap_cone_angle_deg": {"rmse": cone}, "funnel_flow_rate_g_s": {"rmse": flow},
+               "tray_mass_g": {"rmse": 0.0}, "funnel_residue_g": {"rmse": 0.0}}
+        (out / stage / "compare.json").write_text(json.dumps({"rows": rows, "observables": obs}))
+    (out / "2-diagnose").mkdir()
+    cands = [{"name": "fines", "statistic": 40.0, "p_value": 1e-9, "strength": 0.16},
+             {"name": "capillary", "statistic": 1.0, "p_value": 0.9, "strength": 0.01}]
+    (out / "2-diagnose" / "diagnosis.json").write_text(json.dumps({"candidates": cands}))
+    (out / "3-fit").mkdir()
+    fit = {"parameters": [{"label": "soil-soil.rolling_friction"}, {"label": "candidate.fines"}],
+           "estimate": [0.01, 0.152], "chi2": 7.5, "dof": 6}
+    (out / "3-fit" / "fit.json").write_text(json.dumps(fit))
+    (out / "data.csv").write_text("test,observable,source\nrepose,x,synth: truth m.toml with fines=0.15; seed 1\n")
+
+
+class Tables(unittest.TestCase):
+    def test_relative_noise_is_a_share_of_the_value(self):
+        t = load_tables()
+        spec = {"funnel_flow_rate_g_s": "2%", "heap_cone_angle_deg": "0.5"}
+        self.assertAlmostEqual(t.injected(spec, "funnel_flow_rate_g_s", -300.0), 6.0)
+        self.assertEqual(t.injected(spec, "heap_cone_angle_deg", 40.0), 0.5)
+
+    def test_the_default_noise_is_the_scripts(self):
+        t = load_tables()
+        setup = (REPO / "tools" / "discovery" / "setup.sh").read_text()
+        self.assertIn("NOISE=${NOISE:-" + t.default_noise() + "}", setup)
+
+    def test_one_study_gives_both_ratios(self):
+        t = load_tables()
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp) / "hidden-fines"
+            write_study(out)
+            spec = {"heap_cone_angle_deg": "0.5", "funnel_flow_rate_g_s": "2%",
+                    "tray_mass_g": "0.5", "funnel_residue_g": "0.05"}
+            buf = io.StringIO()
+            with redirect_stdout(buf):
+                t.hidden_tables([str(out)], spec)
+            text = buf.getvalue()
+        self.assertIn("| fines (0.15) | fines | 40.0 | 1e-09 | 0.1600 | capillary (0.9) | 0.1520 | 7.5 / 6 |", text)
+        # Cone: 0.6 against an RMS uncertainty of 1.0 and an injected 0.5.
+        self.assertIn("3 -> 0.6 (0.60, 1.20)", text)
+        # Flow: 9 against 10, and against 2 % of 400 and 300 g/s (8 and 6, RMS sqrt(50)).
+        self.assertIn(f"50 -> 9 (0.90, {9 / math.sqrt(50):.2f})", text)
+        self.assertIn(f"largest RMSE after: 0.90x the data's noise, {9 / math.sqrt(50):.2f}x the injected noise", text)
+
+
+if __name__ == "__main__":
+    unittest.main()
