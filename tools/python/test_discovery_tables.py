@@ -10,24 +10,22 @@ relative noise (a percentage of each measured value) are checked against hand ar
 
 from __future__ import annotations
 
-import importlib.util
 import io
 import json
 import math
+import runpy
 import tempfile
 import unittest
 from contextlib import redirect_stdout
 from pathlib import Path
+from types import SimpleNamespace
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def load_tables():
-    spec = importlib.util.spec_from_file_location("discovery_tables",
-                                                  REPO / "tools" / "discovery" / "tables.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """tables.py's functions (it is a script, not a package)."""
+    return SimpleNamespace(**runpy.run_path(str(REPO / "tools" / "discovery" / "tables.py")))
 
 
 def write_study(out: Path):
