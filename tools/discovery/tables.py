@@ -37,6 +37,13 @@ def load(path):
         return json.load(f)
 
 
+def hidden(study):
+    """The effect hidden in a study's data and its strength, from the data's `source`
+    ("synth: truth M with NAME=S; ...")."""
+    with open(f"{study}/data.csv") as f:
+        return re.search(r"with ([a-z_]+)=([0-9.e-]+)", f.read()).groups()
+
+
 def rms(xs):
     return math.sqrt(sum(x * x for x in xs) / len(xs))
 
@@ -46,9 +53,7 @@ def hidden_tables(dirs, spec):
           "| second (p) | fitted strength | chi^2 / dof after |")
     print("|---|---|---|---|---|---|---|---|")
     for d in dirs:
-        effect = os.path.basename(os.path.normpath(d))[len("hidden-"):]
-        source = open(f"{d}/data.csv").read()
-        strength = re.search(r"with [a-z_]+=([0-9.e-]+)", source).group(1)
+        effect, strength = hidden(d)
         c = load(f"{d}/2-diagnose/diagnosis.json")["candidates"]
         fit = load(f"{d}/3-fit/fit.json")
         k = next(i for i, p in enumerate(fit["parameters"]) if p["label"].startswith("candidate."))
@@ -74,7 +79,7 @@ def hidden_tables(dirs, spec):
                       after[o]["rmse"] / rms([injected(spec, o, r["value"]) for r in mine])]
             worst = [max(w, x) for w, x in zip(worst, ratios)]
             cells.append(f"{before[o]['rmse']:.3g} -> {after[o]['rmse']:.3g} ({ratios[0]:.2f}, {ratios[1]:.2f})")
-        print(f"| {os.path.basename(os.path.normpath(d))[len('hidden-'):]} | " + " | ".join(cells) + " |")
+        print(f"| {hidden(d)[0]} | " + " | ".join(cells) + " |")
     print()
     print(f"largest RMSE after: {worst[0]:.2f}x the data's noise, {worst[1]:.2f}x the injected noise")
 
