@@ -69,8 +69,8 @@ def hidden_tables(dirs, spec):
     print("|---" * (len(readings) + 1) + "|")
     worst = [0.0, 0.0]
     for d in dirs:
-        rows = load(f"{d}/1-compare/compare.json")["rows"]
-        before = load(f"{d}/1-compare/compare.json")["observables"]
+        first = load(f"{d}/1-compare/compare.json")
+        rows, before = first["rows"], first["observables"]
         after = load(f"{d}/4-compare/compare.json")["observables"]
         cells = []
         for o in readings:
