@@ -7,7 +7,7 @@
 #   tools/discovery/hidden_effect.sh EFFECT STRENGTH OUT [SEED]
 #   tools/discovery/hidden_effect.sh plastic_adhesion 0.05 runs/hidden-plastic
 #
-# The data: the funnel test at 3, 6, 9 and 12 % moisture, four readings each (fixed-base
+# The data: the funnel test at LEVELS % moisture (3, 6, 9, 12), four readings each (fixed-base
 # cone angle, tray mass, flow rate, soil left in the funnel), each value the mean of R_DATA
 # truth runs plus the injected noise. The error after the fit is printed against the data's
 # noise (the RMS of their `uncertainty`: the injected noise and the scatter of the truth's
@@ -15,8 +15,10 @@
 #
 # Environment: TILTH (the binary; default target/release/tilth), MODEL (default
 # models/li2022.toml), SCALE (default --coarse; empty: the study's scale), R, R_DATA and
-# R_JUDGE (replicates) and NOISE (the injected noise) as setup.sh says, FREE (the model's
-# free parameter), CACHE
+# R_JUDGE (replicates), NOISE (the injected noise) and LEVELS (the moisture levels) as
+# setup.sh says, FREE (the model's free parameter), TRUTH=1 (also compare the truth itself
+# with the data, R_JUDGE runs per condition, in OUT/5-truth: the error a perfect fit would
+# leave on these data, which the fitted model's is read against), CACHE
 # (the run cache, default OUT/cache: give several studies of one model the same cache and
 # they share the model's runs).
 set -euo pipefail
@@ -46,5 +48,9 @@ echo "diagnose: first $name (strength $est, significant: $significant); hidden: 
   --replicates "$R" --iterations 3 $SCALE --quiet --cache "$cache" > /dev/null
 "$tilth" compare --model "$out/3-fit/model.toml" --data "$out/data.csv" --out "$out/4-compare" \
   --replicates "$R_JUDGE" $SCALE --quiet --cache "$cache" > /dev/null
+if [ "${TRUTH:-0}" = 1 ]; then
+  "$tilth" compare --model "$out/data.truth.toml" --data "$out/data.csv" --out "$out/5-truth" \
+    --replicates "$R_JUDGE" $SCALE --quiet --cache "$cache" > /dev/null
+fi
 "$tilth" report "$out" > /dev/null
 python3 "$(dirname "$0")/tables.py" --one "$out" "$NOISE"

@@ -9,7 +9,10 @@ as the proof's test leaves them in target/tmp/discovery-proof; `--one` reads one
 hidden-effect study's OUT. NOISE is the injected noise the data were made with (default:
 tools/discovery/setup.sh's). The error after the fit is given against the data's noise (the
 RMS of their `uncertainty`: the injected noise and the scatter of the truth's mean, which
-the proof's test judges) and against the injected noise alone. Prints Markdown.
+the proof's test judges) and against the injected noise alone. A study run with TRUTH=1 also
+holds the truth's own compare with its data (`5-truth/`): its error is the one a perfect fit
+would leave on that draw of the noise, and a table sets the fitted model's beside it. Prints
+Markdown.
 """
 import glob
 import json
@@ -82,6 +85,28 @@ def hidden_tables(dirs, spec):
         print(f"| {hidden(d)[0]} | " + " | ".join(cells) + " |")
     print()
     print(f"largest RMSE after: {worst[0]:.2f}x the data's noise, {worst[1]:.2f}x the injected noise")
+    truth_table([d for d in dirs if os.path.exists(f"{d}/5-truth/compare.json")], readings, spec)
+
+
+def truth_table(dirs, readings, spec):
+    """RMSE / injected noise of the fitted model and of the truth itself, on the same data."""
+    if not dirs:
+        return
+    print()
+    print("RMSE / injected noise, the fitted model against the truth itself (the same data, "
+          "as many runs per condition):")
+    print()
+    print("| hidden | " + " | ".join(HEADS.get(o, o) for o in readings) + " |")
+    print("|---" * (len(readings) + 1) + "|")
+    for d in dirs:
+        rows = load(f"{d}/1-compare/compare.json")["rows"]
+        after = load(f"{d}/4-compare/compare.json")["observables"]
+        truth = load(f"{d}/5-truth/compare.json")["observables"]
+        cells = []
+        for o in readings:
+            noise = rms([injected(spec, o, r["value"]) for r in rows if r["observable"] == o])
+            cells.append(f"{after[o]['rmse'] / noise:.2f} (truth {truth[o]['rmse'] / noise:.2f})")
+        print(f"| {hidden(d)[0]} | " + " | ".join(cells) + " |")
 
 
 def null_table(root):

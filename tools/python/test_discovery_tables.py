@@ -82,6 +82,25 @@ class Tables(unittest.TestCase):
         # Flow: 9 against 10, and against 2 % of 400 and 300 g/s (8 and 6, RMS sqrt(50)).
         self.assertIn(f"50 -> 9 (0.90, {9 / math.sqrt(50):.2f})", text)
         self.assertIn(f"largest RMSE after: 0.90x the data's noise, {9 / math.sqrt(50):.2f}x the injected noise", text)
+        self.assertNotIn("the truth itself", text)
+
+    def test_the_truths_own_error_beside_the_fits(self):
+        t = load_tables()
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp) / "hidden-fines"
+            write_study(out)
+            (out / "5-truth").mkdir()
+            obs = {"heap_cone_angle_deg": {"rmse": 0.7}, "funnel_flow_rate_g_s": {"rmse": 5.0},
+                   "tray_mass_g": {"rmse": 0.0}, "funnel_residue_g": {"rmse": 0.0}}
+            (out / "5-truth" / "compare.json").write_text(json.dumps({"observables": obs}))
+            spec = {"heap_cone_angle_deg": "0.5", "funnel_flow_rate_g_s": "2%",
+                    "tray_mass_g": "0.5", "funnel_residue_g": "0.05"}
+            buf = io.StringIO()
+            with redirect_stdout(buf):
+                t.hidden_tables([str(out)], spec)
+            text = buf.getvalue()
+        # Cone: the fit's 0.6 and the truth's 0.7 against 0.5; flow: 9 and 5 against sqrt(50).
+        self.assertIn(f"| fines | 1.20 (truth 1.40) | {9 / math.sqrt(50):.2f} (truth {5 / math.sqrt(50):.2f}) |", text)
 
 
 if __name__ == "__main__":
