@@ -136,8 +136,9 @@ pub fn score_tests(
             } else {
                 (0.0, 0.0)
             };
+            // The upper tail itself, not 1 - cdf: that rounds every p below about 1e-16 to 0.
             let p_raw = if identifiable {
-                1.0 - ChiSquared::new(1.0).expect("1 df").cdf(statistic)
+                ChiSquared::new(1.0).expect("1 df").sf(statistic)
             } else {
                 1.0
             };
@@ -340,6 +341,23 @@ mod tests {
         assert!(s[0].p_value < 0.01, "{:?}", s[0]);
         assert!((s[0].strength - 0.8).abs() < 0.15, "{:?}", s[0]);
         assert!(s.iter().find(|c| c.name == "a").unwrap().p_value > 0.01);
+    }
+
+    /// A strong signal's p-value is the chi^2(1) tail, erfc(sqrt(S / 2)), down to the
+    /// smallest numbers: not 0 (1 - cdf rounds everything below about 1e-16 to 0).
+    #[test]
+    fn a_strong_signals_p_value_is_not_rounded_to_zero() {
+        let (x, cands) = problem(7);
+        let r: Vec<f64> = cands[1].sensitivity.iter().map(|v| 3.0 * v).collect();
+        let s = score_tests(&r, &x, &cands);
+        let b = s.iter().find(|c| c.name == "b").unwrap();
+        let tail = statrs::function::erf::erfc((b.statistic / 2.0).sqrt());
+        assert!(b.statistic > 75.0 && tail < 1e-17, "{b:?}");
+        assert!(
+            (b.p_raw / tail - 1.0).abs() < 1e-6,
+            "{} against {tail}",
+            b.p_raw
+        );
     }
 
     /// A candidate that is another's signature plus a little of its own is reported alike

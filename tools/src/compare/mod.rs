@@ -95,7 +95,7 @@ fn p_two_sided(t: f64, df: f64) -> f64 {
         return if t.is_nan() { 1.0 } else { 0.0 };
     }
     match StudentsT::new(0.0, 1.0, df) {
-        Ok(d) => 2.0 * (1.0 - d.cdf(t.abs())),
+        Ok(d) => 2.0 * d.sf(t.abs()),
         Err(_) => f64::NAN,
     }
 }
@@ -148,7 +148,7 @@ fn verdict(rows: &[Row], idx: &[usize]) -> Verdict {
     let zs: Vec<Option<f64>> = done.iter().map(|&k| rows[k].z()).collect();
     let chi2 = (n >= 1 && zs.iter().all(Option::is_some)).then(|| {
         let c: f64 = zs.iter().map(|z| z.unwrap().powi(2)).sum();
-        let p = ChiSquared::new(nf).map_or(f64::NAN, |d| 1.0 - d.cdf(c));
+        let p = ChiSquared::new(nf).map_or(f64::NAN, |d| d.sf(c));
         (c, p)
     });
     let mut names: Vec<&String> = vec![];
