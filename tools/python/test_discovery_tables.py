@@ -53,6 +53,24 @@ def write_study(out: Path):
     (out / "data.csv").write_text("test,observable,source\nrepose,x,synth: truth m.toml with fines=0.15; seed 1\n")
 
 
+def tables_of_study(truth=None) -> str:
+    """tables.py's output for write_study's study (with a `5-truth/` of these observables'
+    RMSEs if given), at noise 0.5 deg, 0.5 g, 2 % and 0.05 g."""
+    t = load_tables()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "hidden-fines"
+        write_study(out)
+        if truth is not None:
+            (out / "5-truth").mkdir()
+            (out / "5-truth" / "compare.json").write_text(json.dumps({"observables": truth}))
+        spec = {"heap_cone_angle_deg": "0.5", "funnel_flow_rate_g_s": "2%",
+                "tray_mass_g": "0.5", "funnel_residue_g": "0.05"}
+        buf = io.StringIO()
+        with redirect_stdout(buf):
+            t.hidden_tables([str(out)], spec)
+        return buf.getvalue()
+
+
 class Tables(unittest.TestCase):
     def test_relative_noise_is_a_share_of_the_value(self):
         t = load_tables()
@@ -66,16 +84,7 @@ class Tables(unittest.TestCase):
         self.assertIn("NOISE=${NOISE:-" + t.default_noise() + "}", setup)
 
     def test_one_study_gives_both_ratios(self):
-        t = load_tables()
-        with tempfile.TemporaryDirectory() as tmp:
-            out = Path(tmp) / "hidden-fines"
-            write_study(out)
-            spec = {"heap_cone_angle_deg": "0.5", "funnel_flow_rate_g_s": "2%",
-                    "tray_mass_g": "0.5", "funnel_residue_g": "0.05"}
-            buf = io.StringIO()
-            with redirect_stdout(buf):
-                t.hidden_tables([str(out)], spec)
-            text = buf.getvalue()
+        text = tables_of_study()
         self.assertIn("| fines (0.15) | fines | 40.0 | 1e-09 | 0.1600 | capillary (0.9) | 0.1520 | 7.5 / 6 |", text)
         # Cone: 0.6 against an RMS uncertainty of 1.0 and an injected 0.5.
         self.assertIn("3 -> 0.6 (0.60, 1.20)", text)
@@ -85,20 +94,9 @@ class Tables(unittest.TestCase):
         self.assertNotIn("the truth itself", text)
 
     def test_the_truths_own_error_beside_the_fits(self):
-        t = load_tables()
-        with tempfile.TemporaryDirectory() as tmp:
-            out = Path(tmp) / "hidden-fines"
-            write_study(out)
-            (out / "5-truth").mkdir()
-            obs = {"heap_cone_angle_deg": {"rmse": 0.7}, "funnel_flow_rate_g_s": {"rmse": 5.0},
-                   "tray_mass_g": {"rmse": 0.0}, "funnel_residue_g": {"rmse": 0.0}}
-            (out / "5-truth" / "compare.json").write_text(json.dumps({"observables": obs}))
-            spec = {"heap_cone_angle_deg": "0.5", "funnel_flow_rate_g_s": "2%",
-                    "tray_mass_g": "0.5", "funnel_residue_g": "0.05"}
-            buf = io.StringIO()
-            with redirect_stdout(buf):
-                t.hidden_tables([str(out)], spec)
-            text = buf.getvalue()
+        truth = {"heap_cone_angle_deg": {"rmse": 0.7}, "funnel_flow_rate_g_s": {"rmse": 5.0},
+                 "tray_mass_g": {"rmse": 0.0}, "funnel_residue_g": {"rmse": 0.0}}
+        text = tables_of_study(truth)
         # Cone: the fit's 0.6 and the truth's 0.7 against 0.5; flow: 9 and 5 against sqrt(50).
         self.assertIn(f"| fines | 1.20 (truth 1.40) | {9 / math.sqrt(50):.2f} (truth {5 / math.sqrt(50):.2f}) |", text)
 
