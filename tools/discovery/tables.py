@@ -71,42 +71,35 @@ def hidden_tables(dirs, spec):
     print("| hidden | " + " | ".join(HEADS.get(o, o) for o in readings) + " |")
     print("|---" * (len(readings) + 1) + "|")
     worst = [0.0, 0.0]
+    truth_rows = []  # studies run with TRUTH=1: the fit's and the truth's error / injected noise
     for d in dirs:
         first = load(f"{d}/1-compare/compare.json")
         rows, before = first["rows"], first["observables"]
         after = load(f"{d}/4-compare/compare.json")["observables"]
-        cells = []
+        truth_file = f"{d}/5-truth/compare.json"
+        truth = load(truth_file)["observables"] if os.path.exists(truth_file) else None
+        cells, truth_cells = [], []
         for o in readings:
             mine = [r for r in rows if r["observable"] == o]
-            ratios = [after[o]["rmse"] / rms([r["uncertainty"] for r in mine]),
-                      after[o]["rmse"] / rms([injected(spec, o, r["value"]) for r in mine])]
+            noise = rms([injected(spec, o, r["value"]) for r in mine])
+            ratios = [after[o]["rmse"] / rms([r["uncertainty"] for r in mine]), after[o]["rmse"] / noise]
             worst = [max(w, x) for w, x in zip(worst, ratios)]
             cells.append(f"{before[o]['rmse']:.3g} -> {after[o]['rmse']:.3g} ({ratios[0]:.2f}, {ratios[1]:.2f})")
+            if truth is not None:
+                truth_cells.append(f"{ratios[1]:.2f} (truth {truth[o]['rmse'] / noise:.2f})")
         print(f"| {hidden(d)[0]} | " + " | ".join(cells) + " |")
+        if truth is not None:
+            truth_rows.append(f"| {hidden(d)[0]} | " + " | ".join(truth_cells) + " |")
     print()
     print(f"largest RMSE after: {worst[0]:.2f}x the data's noise, {worst[1]:.2f}x the injected noise")
-    truth_table([d for d in dirs if os.path.exists(f"{d}/5-truth/compare.json")], readings, spec)
-
-
-def truth_table(dirs, readings, spec):
-    """RMSE / injected noise of the fitted model and of the truth itself, on the same data."""
-    if not dirs:
-        return
-    print()
-    print("RMSE / injected noise, the fitted model against the truth itself (the same data, "
-          "as many runs per condition):")
-    print()
-    print("| hidden | " + " | ".join(HEADS.get(o, o) for o in readings) + " |")
-    print("|---" * (len(readings) + 1) + "|")
-    for d in dirs:
-        rows = load(f"{d}/1-compare/compare.json")["rows"]
-        after = load(f"{d}/4-compare/compare.json")["observables"]
-        truth = load(f"{d}/5-truth/compare.json")["observables"]
-        cells = []
-        for o in readings:
-            noise = rms([injected(spec, o, r["value"]) for r in rows if r["observable"] == o])
-            cells.append(f"{after[o]['rmse'] / noise:.2f} (truth {truth[o]['rmse'] / noise:.2f})")
-        print(f"| {hidden(d)[0]} | " + " | ".join(cells) + " |")
+    if truth_rows:
+        print()
+        print("RMSE / injected noise, the fitted model against the truth itself (the same data, "
+              "as many runs per condition):")
+        print()
+        print("| hidden | " + " | ".join(HEADS.get(o, o) for o in readings) + " |")
+        print("|---" * (len(readings) + 1) + "|")
+        print("\n".join(truth_rows))
 
 
 def null_table(root):
