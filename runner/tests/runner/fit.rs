@@ -122,8 +122,9 @@ fn the_fitted_model_is_what_was_simulated() {
     }
 }
 
-/// Readings whose uncertainty dwarfs any model's miss: the start is at the noise (chi^2 at
-/// most the degrees of freedom), so the fit runs the start and its Jacobian and stops there.
+/// Readings whose uncertainty dwarfs any model's miss: the start is at the noise (the step
+/// from it is predicted to gain less chi^2 than chi^2_1's 95 % quantile, 3.84), so the fit
+/// runs the start and its Jacobian and stops there.
 #[test]
 fn a_fit_stops_where_the_residuals_reach_the_noise() {
     let dir = scratch("fit-at-noise");
@@ -161,6 +162,8 @@ fn a_fit_stops_where_the_residuals_reach_the_noise() {
     );
     assert_eq!(fit["stopped"], "at_noise");
     assert_eq!(fit["history"].as_array().unwrap().len(), 1);
+    let gain = fit["history"][0]["predicted_gain"].as_f64().unwrap();
+    assert!((0.0..3.841).contains(&gain), "predicted gain {gain}");
     assert!(out.join("runs/iter-0/param-0").exists(), "no Jacobian");
     assert!(
         !out.join("runs/iter-1").exists(),

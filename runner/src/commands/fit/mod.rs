@@ -20,16 +20,17 @@
 //! each range; a step that raises chi^2 is taken back, lambda raised and the next step at most half as long (Marquardt 1963).
 //! Standard errors from (J'J)^-1, scaled by chi^2 / dof when that is above 1.
 //!
-//! The fit stops at the first setting whose residuals are at the noise, chi^2 <= dof
-//! (Morozov's discrepancy principle, the stopping rule of Hanke's regularizing
-//! Levenberg-Marquardt scheme, Inverse Problems 13 (1997) 79-95): a step from there would
-//! follow the runs' scatter and costs 1 + P settings of DEM runs; `--to-minimum` keeps
-//! stepping. It also stops when every step is under 1 % of its range, or after
-//! `--iterations`.
+//! The fit stops at the first setting where the next step's predicted chi^2 gain is within
+//! the noise (`stop.rs`: the score statistic under chi^2_P's 95 % quantile): a step from
+//! there would follow the runs' scatter and costs 1 + P settings of DEM runs;
+//! `--to-minimum` keeps stepping. It also stops when every step is under 1 % of its range,
+//! or after `--iterations`.
 //!
 //! Writes `DIR/fit.json` (estimate, standard errors, correlations, the history),
 //! `DIR/fit.md`, and `DIR/model.toml`: the model with the fitted parameters, ready for
 //! `tilth compare`. Runs go to `DIR/runs/iter-K/<variant>/` and resume.
+
+mod stop;
 
 use super::compare::{SetArgs, Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
@@ -43,6 +44,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
+use stop::{Stop, noise_gain, predicted_gain};
 
 #[derive(Debug, Args)]
 pub struct FitArgs {
@@ -62,8 +64,8 @@ pub struct FitArgs {
     /// Levenberg-Marquardt iterations, at most (each runs 1 + parameters settings).
     #[arg(long, default_value_t = 4)]
     pub iterations: usize,
-    /// Keep stepping after the residuals reach the noise (chi^2 <= degrees of freedom),
-    /// where the fit stops by default.
+    /// Keep stepping after the next step's predicted chi^2 gain is within the noise (under
+    /// chi^2_P's 95 % quantile), where the fit stops by default.
     #[arg(long)]
     pub to_minimum: bool,
     #[arg(long)]
@@ -195,6 +197,10 @@ pub struct Step {
     pub rmse: BTreeMap<String, f64>,
     /// Whether this setting improved on the best before it.
     pub accepted: bool,
+    /// For an accepted setting whose Jacobian was run: the chi^2 the Gauss-Newton step from
+    /// it is predicted to remove, z'J (J'J)^-1 J'z (`stop.rs`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub predicted_gain: Option<f64>,
 }
 
 /// The simulated row means (None where a run failed) and scatters at one setting.
@@ -320,6 +326,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             chi2,
             rmse: rmse(&rows, &centre),
             accepted,
+            predicted_gain: None,
         });
         if accepted {
             lambda = (lambda / 3.0f64).max(1e-6);
@@ -351,11 +358,14 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                     jac[(i, j)] = (m - centre[i]) / h / se[i];
                 }
             }
+            let gain = predicted_gain(&jac, &z);
+            history.last_mut().expect("pushed above").predicted_gain = gain;
             best = Some((theta.clone(), chi2, centre, se, jac));
-            if chi2 <= dof as f64 && !args.to_minimum {
+            let within = noise_gain(n);
+            if let Some(g) = gain.filter(|g| *g < within && !args.to_minimum) {
                 if !args.quiet {
                     eprintln!(
-                        "fit: at the noise (chi^2 {chi2:.2} <= {dof} degrees of freedom); --to-minimum steps on"
+                        "fit: at the noise (the next step's predicted chi^2 gain {g:.2} < {within:.2}, chi^2_{n}'s 95 % quantile); --to-minimum steps on"
                     );
                 }
                 stopped = Stop::AtNoise;
@@ -499,28 +509,6 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         args.out.display()
     )?;
     Ok(())
-}
-
-/// Why the fit ended.
-#[derive(Debug, Clone, Copy, Serialize)]
-#[serde(rename_all = "snake_case")]
-enum Stop {
-    /// chi^2 <= dof: the residuals are at the noise.
-    AtNoise,
-    /// Every step under 1 % of its range.
-    Converged,
-    /// `--iterations` used up.
-    Iterations,
-}
-
-impl Stop {
-    fn say(self, iterations: usize) -> String {
-        match self {
-            Stop::AtNoise => "Stopped at the noise (chi^2 <= degrees of freedom): a further step would follow the runs' scatter; `--to-minimum` steps on.".into(),
-            Stop::Converged => "Converged: every step under 1 % of its range.".into(),
-            Stop::Iterations => format!("Stopped after --iterations {iterations}."),
-        }
-    }
 }
 
 fn describe(p: &FreeParam) -> String {
