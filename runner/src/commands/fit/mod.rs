@@ -20,9 +20,9 @@
 //! each range; a step that raises chi^2 is taken back, lambda raised and the next step at most half as long (Marquardt 1963).
 //! Standard errors from (J'J)^-1, scaled by chi^2 / dof when that is above 1.
 //!
-//! The fit stops at the first setting where the next step's predicted chi^2 gain is within
-//! the noise (`stop.rs`: the score statistic under chi^2_P's 95 % quantile): a step from
-//! there would follow the runs' scatter and costs 1 + P settings of DEM runs;
+//! The fit stops at the first setting at the noise (`stop.rs`): chi^2 <= dof, and the next
+//! step's predicted chi^2 gain (the score statistic) under chi^2_P's 95 % quantile. A step
+//! from there would follow the runs' scatter and costs 1 + P settings of DEM runs;
 //! `--to-minimum` keeps stepping. It also stops when every step is under 1 % of its range,
 //! or after `--iterations`.
 //!
@@ -44,7 +44,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
-use stop::{Stop, noise_gain, predicted_gain};
+use stop::{Stop, at_noise, noise_gain, predicted_gain};
 
 #[derive(Debug, Args)]
 pub struct FitArgs {
@@ -64,8 +64,8 @@ pub struct FitArgs {
     /// Levenberg-Marquardt iterations, at most (each runs 1 + parameters settings).
     #[arg(long, default_value_t = 4)]
     pub iterations: usize,
-    /// Keep stepping after the next step's predicted chi^2 gain is within the noise (under
-    /// chi^2_P's 95 % quantile), where the fit stops by default.
+    /// Keep stepping at the noise (chi^2 <= degrees of freedom and the next step's predicted
+    /// chi^2 gain under chi^2_P's 95 % quantile), where the fit stops by default.
     #[arg(long)]
     pub to_minimum: bool,
     #[arg(long)]
@@ -361,11 +361,12 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             let gain = predicted_gain(&jac, &z);
             history.last_mut().expect("pushed above").predicted_gain = gain;
             best = Some((theta.clone(), chi2, centre, se, jac));
-            let within = noise_gain(n);
-            if let Some(g) = gain.filter(|g| *g < within && !args.to_minimum) {
+            if at_noise(chi2, dof, gain, n) && !args.to_minimum {
                 if !args.quiet {
                     eprintln!(
-                        "fit: at the noise (the next step's predicted chi^2 gain {g:.2} < {within:.2}, chi^2_{n}'s 95 % quantile); --to-minimum steps on"
+                        "fit: at the noise (chi^2 {chi2:.2} <= {dof} degrees of freedom; the next step's predicted gain {} < {:.2}, chi^2_{n}'s 95 % quantile); --to-minimum steps on",
+                        gain.map_or("-".into(), |g| format!("{g:.2}")),
+                        noise_gain(n)
                     );
                 }
                 stopped = Stop::AtNoise;
