@@ -44,23 +44,32 @@ pub struct CompareArgs {
     /// independent draws; a validation can take seeds no calibration run used.
     #[arg(long, default_value_t = 1)]
     pub first_seed: u64,
+    /// Only these tests (comma-separated: repose, direct_shear, ucs).
+    #[arg(long, value_delimiter = ',')]
+    pub tests: Vec<String>,
+    #[command(flatten)]
+    pub lab: LabRunArgs,
+}
+
+/// How the lab tests' runs are made: the options `compare`, `diagnose`, `fit` and `synth`
+/// share, with one meaning and one help text.
+#[derive(Debug, Args)]
+pub struct LabRunArgs {
     /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
     #[arg(long)]
     pub coarse: bool,
     #[command(flatten)]
     pub set: SetArgs,
-    /// Only these tests (comma-separated: repose, direct_shear, ucs).
-    #[arg(long, value_delimiter = ',')]
-    pub tests: Vec<String>,
     /// Cores to use (default: all this process may use).
     #[arg(long)]
     pub cores: Option<usize>,
+    /// No progress bars.
     #[arg(long)]
     pub quiet: bool,
     /// Keep the runs in this directory, keyed by the model's values (not its comments), the
-    /// test, the conditions, the first seed and this build of tilth, and reuse any run
-    /// already there, whichever command made it (one command at a time per cache). More
-    /// --replicates later (here or in --out) run only the new seeds.
+    /// test, the conditions, the seeds and this build of tilth, and reuse any run already
+    /// there, whichever command made it (one command at a time per cache). More replicates
+    /// later run only the new seeds.
     #[arg(long)]
     pub cache: Option<PathBuf>,
 }
@@ -186,7 +195,7 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             u64::MAX - args.replicates as u64
         );
     }
-    let set = args.set.parse()?;
+    let set = args.lab.set.parse()?;
     let model = std::path::absolute(&args.model)?;
     if !model.exists() {
         bail!("{}: no such model file", args.model.display());
@@ -215,11 +224,8 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             out: &args.out,
             replicates: args.replicates,
             first_seed: args.first_seed,
-            coarse: args.coarse,
+            lab: &args.lab,
             set: &set,
-            cores: args.cores,
-            quiet: args.quiet,
-            cache: args.cache.as_deref(),
         },
         &stop,
     )?;
@@ -243,15 +249,12 @@ pub struct Simulate<'a> {
     /// Replicate r of a row runs with the seed [`condition_seed`] derives from
     /// `first_seed + r` and the row's conditions.
     pub first_seed: u64,
-    pub coarse: bool,
-    pub cores: Option<usize>,
-    pub quiet: bool,
-    /// A run cache shared between commands: runs go to `cache/<test>-<key>/`, the key made of
-    /// the model file's content, the test, the conditions, the first seed and the build of
-    /// tilth (a hash of its executable), so that any command that needs the same runs, or
-    /// more replicates of them, finds them done (`--cache`).
-    pub cache: Option<&'a Path>,
-    /// `--set`: keys of the tests' own tables in every run.
+    /// The preset, cores, progress and run cache. The cache is shared between commands:
+    /// runs go to `cache/<test>-<key>/`, the key made of the model file's content, the test,
+    /// the conditions, the first seed and the build of tilth (a hash of its executable), so
+    /// that any command that needs the same runs, or more replicates of them, finds them done.
+    pub lab: &'a LabRunArgs,
+    /// `--set` of `lab`, parsed: keys of the tests' own tables in every run.
     pub set: &'a [TestSetting],
 }
 
@@ -290,7 +293,7 @@ pub fn simulate(
     how: &Simulate,
     stop: &Arc<AtomicBool>,
 ) -> Result<Vec<(Vec<f64>, Vec<String>)>> {
-    let model = match how.cache {
+    let model = match how.lab.cache.as_deref() {
         Some(cache) => cached_model(how.model, cache)?,
         None => how.model.to_path_buf(),
     };
@@ -351,7 +354,7 @@ pub fn simulate(
                 });
             }
         }
-        let text = experiment_text(test, &model, how.coarse, how.set);
+        let text = experiment_text(test, &model, how.lab.coarse, how.set);
         let mut plan = Plan::generated(test, text, Path::new("."), factors, runs)
             .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
         // The sweep's identity leaves out how many replicates it has (each run is still
@@ -361,7 +364,7 @@ pub fn simulate(
             &serde_json::to_string(&conditions)?,
             &how.first_seed.to_string(),
         ]);
-        let dir = match how.cache {
+        let dir = match how.lab.cache.as_deref() {
             Some(cache) => cache.join(format!(
                 "{test}-{}",
                 fnv1a(&[&plan.fingerprint, build_id()?])
@@ -372,7 +375,7 @@ pub fn simulate(
     }
     let mut by_row: BTreeMap<usize, (Vec<f64>, Vec<String>)> = BTreeMap::new();
     for (test, plan, dir) in &plans {
-        run_generated(plan, dir, how.cores, how.quiet, stop)?;
+        run_generated(plan, dir, how.lab.cores, how.lab.quiet, stop)?;
         for (i, m) in rows.iter().enumerate().filter(|(_, m)| &m.test == test) {
             let (sims, problems) = by_row.entry(m.row).or_default();
             for run in plan.runs.iter().filter(|r| r.std == group[i]) {
@@ -622,8 +625,8 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
         "created": created,
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
-        "coarse": args.coarse,
-        "set": args.set.set,
+        "coarse": args.lab.coarse,
+        "set": args.lab.set.set,
         "replicates": args.replicates,
         "first_seed": args.first_seed,
         "rows": rows,

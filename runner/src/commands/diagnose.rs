@@ -13,7 +13,7 @@
 //! `DIR/diagnosis.md`, the ranking in words.
 
 use super::calibrate::{Param, parse_param};
-use super::compare::{SetArgs, Simulate, mean_sd, simulate, std_error};
+use super::compare::{LabRunArgs, Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use super::model_edit::{add_to, switch_on, values_of, variant};
 use crate::lab::model::Model;
@@ -53,19 +53,8 @@ pub struct DiagnoseArgs {
     /// Only these tests (comma-separated).
     #[arg(long, value_delimiter = ',')]
     pub tests: Vec<String>,
-    #[arg(long)]
-    pub coarse: bool,
     #[command(flatten)]
-    pub set: SetArgs,
-    #[arg(long)]
-    pub cores: Option<usize>,
-    #[arg(long)]
-    pub quiet: bool,
-    /// Keep the runs in this directory, keyed by the model's values (not its comments), the
-    /// test, the conditions and the seeds, and reuse any run already there, whichever
-    /// command made it (one command at a time per cache).
-    #[arg(long)]
-    pub cache: Option<PathBuf>,
+    pub lab: LabRunArgs,
 }
 
 /// The linear recalibration of one free parameter that the "after recalibration" numbers
@@ -99,7 +88,7 @@ pub struct Diagnosed {
 }
 
 pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
-    let set = args.set.parse()?;
+    let set = args.lab.set.parse()?;
     if args.replicates < 2 {
         bail!(
             "--replicates {} is out of range: allowed 2 or more (the noise of every finite difference is estimated from the replicates; without it any candidate could look significant)",
@@ -200,7 +189,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     let mut problems: BTreeMap<usize, String> = BTreeMap::new();
     let mut base_scatter: Vec<Option<f64>> = vec![];
     for (k, (name, path, _)) in variants.iter().enumerate() {
-        if !args.quiet {
+        if !args.lab.quiet {
             eprintln!("variant {} of {}: {name}", k + 1, variants.len());
         }
         let sims = simulate(
@@ -215,11 +204,8 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                 } else {
                     1 + args.replicates as u64
                 },
-                coarse: args.coarse,
+                lab: &args.lab,
                 set: &set,
-                cores: args.cores,
-                quiet: args.quiet,
-                cache: args.cache.as_deref(),
             },
             &stop,
         )?;
@@ -374,8 +360,8 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
         "replicates": args.replicates,
-        "coarse": args.coarse,
-        "set": args.set.set,
+        "coarse": args.lab.coarse,
+        "set": args.lab.set.set,
         "alpha": args.alpha,
         "free_parameters": params,
         "rows_used": m,

@@ -17,7 +17,7 @@
 //! so the same S gives the same file. The runs are kept next to the output
 //! (`D.runs/<test>/`, resumable) unless `--work` says where.
 
-use super::compare::{SetArgs, Simulate, mean_sd, simulate};
+use super::compare::{LabRunArgs, Simulate, mean_sd, simulate};
 use super::measurements::{
     CONDITIONS, Measurement, check_against_model, open_csv, rows_of, write_measurements,
 };
@@ -64,21 +64,8 @@ pub struct SynthArgs {
     /// Where the truth's runs go (default: next to --out, `<name>.runs/`).
     #[arg(long)]
     pub work: Option<PathBuf>,
-    /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
-    #[arg(long)]
-    pub coarse: bool,
     #[command(flatten)]
-    pub set: SetArgs,
-    /// Cores to use (default: all this process may use).
-    #[arg(long)]
-    pub cores: Option<usize>,
-    #[arg(long)]
-    pub quiet: bool,
-    /// Keep the runs in this directory, keyed by the model's values (not its comments), the
-    /// test, the conditions and the seeds, and reuse any run already there, whichever
-    /// command made it (one command at a time per cache).
-    #[arg(long)]
-    pub cache: Option<PathBuf>,
+    pub lab: LabRunArgs,
 }
 
 /// Noise of one observable.
@@ -210,7 +197,7 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
 }
 
 pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
-    let set = args.set.parse()?;
+    let set = args.lab.set.parse()?;
     let mut truth = std::path::absolute(&args.truth)?;
     let mut model = Model::load(&truth)?;
     if !args.with.is_empty() {
@@ -257,11 +244,8 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
             out: &work,
             replicates: args.replicates,
             first_seed,
-            coarse: args.coarse,
+            lab: &args.lab,
             set: &set,
-            cores: args.cores,
-            quiet: args.quiet,
-            cache: args.cache.as_deref(),
         },
         &stop,
     )?;
@@ -276,7 +260,7 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
         },
         args.seed,
         args.noise,
-        if args.coarse { ", coarse" } else { "" }
+        if args.lab.coarse { ", coarse" } else { "" }
     );
     for (m, (values, problems)) in rows.iter_mut().zip(sims) {
         if values.len() < args.replicates {
@@ -316,7 +300,7 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
         "wrote {} synthetic measurements to {} (truth runs in {})",
         rows.len(),
         args.out.display(),
-        args.cache.as_ref().unwrap_or(&work).display()
+        args.lab.cache.as_ref().unwrap_or(&work).display()
     )?;
     Ok(())
 }

@@ -32,7 +32,7 @@
 
 mod stop;
 
-use super::compare::{SetArgs, Simulate, mean_sd, simulate, std_error};
+use super::compare::{LabRunArgs, Simulate, mean_sd, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use super::model_edit::{add_to, switch_on, values_of, variant};
 use crate::lab::model::Model;
@@ -70,19 +70,8 @@ pub struct FitArgs {
     pub to_minimum: bool,
     #[arg(long)]
     pub out: PathBuf,
-    #[arg(long)]
-    pub coarse: bool,
     #[command(flatten)]
-    pub set: SetArgs,
-    #[arg(long)]
-    pub cores: Option<usize>,
-    #[arg(long)]
-    pub quiet: bool,
-    /// Keep the runs in this directory, keyed by the model's values (not its comments), the
-    /// test, the conditions and the seeds, and reuse any run already there, whichever
-    /// command made it (one command at a time per cache).
-    #[arg(long)]
-    pub cache: Option<PathBuf>,
+    pub lab: LabRunArgs,
 }
 
 /// What a free parameter moves.
@@ -207,7 +196,7 @@ pub struct Step {
 type Sims = (Vec<Option<f64>>, Vec<Option<f64>>);
 
 pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
-    let set = args.set.parse()?;
+    let set = args.lab.set.parse()?;
     if args.replicates < 2 {
         bail!(
             "--replicates {}: allowed 2 or more (the rows' standard errors need the runs' scatter)",
@@ -250,11 +239,8 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 out: &runs.join(format!("iter-{it}")).join(name),
                 replicates: args.replicates,
                 first_seed: 1,
-                coarse: args.coarse,
+                lab: &args.lab,
                 set: &set,
-                cores: args.cores,
-                quiet: args.quiet,
-                cache: args.cache.as_deref(),
             },
             &stop,
         )?;
@@ -280,7 +266,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     let dof = rows.len().saturating_sub(n).max(1);
     let mut stopped = Stop::Iterations;
     for it in 0..=args.iterations {
-        if !args.quiet {
+        if !args.lab.quiet {
             eprintln!(
                 "fit: iteration {it} of {}: {}",
                 args.iterations,
@@ -362,7 +348,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             history.last_mut().expect("pushed above").predicted_gain = gain;
             best = Some((theta.clone(), chi2, centre, se, jac));
             if at_noise(chi2, dof, gain, n) && !args.to_minimum {
-                if !args.quiet {
+                if !args.lab.quiet {
                     eprintln!(
                         "fit: at the noise (chi^2 {chi2:.2} <= {dof} degrees of freedom; the next step's predicted gain {} < {:.2}, chi^2_{n}'s 95 % quantile); --to-minimum steps on",
                         gain.map_or("-".into(), |g| format!("{g:.2}")),
@@ -412,7 +398,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         }
         if small {
             stopped = Stop::Converged;
-            if !args.quiet {
+            if !args.lab.quiet {
                 eprintln!("fit: converged (every step under 1 % of its range)");
             }
             break;
@@ -453,8 +439,8 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
         "replicates": args.replicates,
-        "coarse": args.coarse,
-        "set": args.set.set,
+        "coarse": args.lab.coarse,
+        "set": args.lab.set.set,
         "parameters": params,
         "estimate": b_theta,
         "standard_error": sd,
