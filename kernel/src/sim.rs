@@ -19,7 +19,7 @@
 use crate::contact::{BondState, BondStatus, Contact, ContactModel, ContactOut};
 use crate::error::{KernelError, Result};
 use crate::factory::Factory;
-use crate::neighbor::{CHUNK, PairList};
+use crate::neighbor::{CHUNK, PairList, chunks_per_task};
 use crate::particles::Particles;
 use crate::step_check::{PackingFrequency, loaded_step_warning, packing_frequency};
 use crate::timestep::{BOND_WARN_FRACTION, WARN_FRACTION, rayleigh_time};
@@ -369,6 +369,7 @@ impl Simulation {
                 .zip(p.mass.par_chunks(CHUNK))
                 .zip(p.inertia.par_chunks(CHUNK))
                 .zip(self.ref_position.par_chunks(CHUNK))
+                .with_max_len(chunks_per_task())
                 .map(|(((((((x, v), w), f), t), m), inertia), x0)| {
                     let mut worst: f64 = 0.0;
                     for k in 0..x.len() {
@@ -550,6 +551,7 @@ impl Simulation {
             out.par_chunks_mut(CHUNK)
                 .zip(pairs.history.par_chunks_mut(CHUNK * stride))
                 .enumerate()
+                .with_max_len(chunks_per_task())
                 .for_each(|(c, (out, hist))| {
                     let base = c * CHUNK;
                     for (k, o) in out.iter_mut().enumerate() {
@@ -600,6 +602,7 @@ impl Simulation {
                 .zip(p.angular_velocity.par_chunks_mut(CHUNK))
                 .zip(wall_chunks.into_par_iter())
                 .enumerate()
+                .with_max_len(chunks_per_task())
                 .map(
                     |(c, ((((fs, ts), vs), ws), (wbase, whist, wforce, wpoint)))| {
                         let mut hits: Vec<(f64, usize, Hit)> = vec![];
@@ -1085,6 +1088,7 @@ fn build_wall_contacts(
     }
     let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
+        .with_max_len(chunks_per_task())
         .map(|c| {
             let mut out = Chunk {
                 counts: vec![],

@@ -1,6 +1,6 @@
 //! The Verlet pair list (half list, j > i) with per-pair contact history.
 
-use super::{CHUNK, CellGrid};
+use super::{CHUNK, CellGrid, chunks_per_task};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -105,6 +105,7 @@ impl PairList {
         // task copies the carried history straight into its part of the new list.
         let chunks: Vec<RowChunk> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
+            .with_max_len(chunks_per_task())
             .map(|c| {
                 let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
                 let mut out = RowChunk {
@@ -188,32 +189,35 @@ impl PairList {
             rest = tail;
         }
         let (new_j, new_start) = (&list.j, &list.row_start);
-        tasks.into_par_iter().for_each(|(rows, hist)| {
-            let base = new_start[rows.start] as usize;
-            for i in rows {
-                let old_row = old.row_of(old_of_new.map_or(i, |m| m[i] as usize));
-                let mut k = old_row.start;
-                for p in new_start[i] as usize..new_start[i + 1] as usize {
-                    let j = new_j[p];
-                    let found = match old_of_new {
-                        None => {
-                            while k < old_row.end && old.j[k] < j {
-                                k += 1;
+        tasks
+            .into_par_iter()
+            .with_max_len(chunks_per_task())
+            .for_each(|(rows, hist)| {
+                let base = new_start[rows.start] as usize;
+                for i in rows {
+                    let old_row = old.row_of(old_of_new.map_or(i, |m| m[i] as usize));
+                    let mut k = old_row.start;
+                    for p in new_start[i] as usize..new_start[i + 1] as usize {
+                        let j = new_j[p];
+                        let found = match old_of_new {
+                            None => {
+                                while k < old_row.end && old.j[k] < j {
+                                    k += 1;
+                                }
+                                (k < old_row.end && old.j[k] == j).then_some(k)
                             }
-                            (k < old_row.end && old.j[k] == j).then_some(k)
+                            Some(m) => {
+                                let oj = m[j as usize];
+                                old_row.clone().find(|&q| old.j[q] == oj)
+                            }
+                        };
+                        if let Some(q) = found {
+                            hist[(p - base) * stride..(p - base + 1) * stride]
+                                .copy_from_slice(&old.history[q * stride..(q + 1) * stride]);
                         }
-                        Some(m) => {
-                            let oj = m[j as usize];
-                            old_row.clone().find(|&q| old.j[q] == oj)
-                        }
-                    };
-                    if let Some(q) = found {
-                        hist[(p - base) * stride..(p - base + 1) * stride]
-                            .copy_from_slice(&old.history[q * stride..(q + 1) * stride]);
                     }
                 }
-            }
-        });
+            });
 
         for &j in &list.j {
             list.rev_start[j as usize + 1] += 1;
