@@ -260,14 +260,24 @@ impl Factory {
 }
 
 /// A uniform grid of spheres over a box; spheres outside the box are ignored (they cannot
-/// touch a particle placed inside the region).
+/// touch a particle placed inside the region). Linked cells in three flat vectors (each
+/// cell's first sphere, each sphere's next), as LAMMPS bins atoms: a vector per cell was one
+/// small allocation per occupied cell, about 100,000 for the settling bench's bed, and glibc
+/// kept their ~10 MB resident long after the grid was dropped (BENCHMARKS.md, tenth sitting).
 struct LocalGrid {
     lo: DVec3,
     cell: f64,
     dims: [usize; 3],
-    cells: Vec<Vec<(DVec3, f64)>>,
+    /// The last sphere put in each cell, [`NONE`] for an empty cell.
+    head: Vec<u32>,
+    /// The sphere put in the same cell before this one, [`NONE`] for the first.
+    next: Vec<u32>,
+    spheres: Vec<(DVec3, f64)>,
     r_max: f64,
 }
+
+/// No sphere.
+const NONE: u32 = u32::MAX;
 
 impl LocalGrid {
     fn new(lo: DVec3, hi: DVec3, cell: f64) -> LocalGrid {
@@ -277,7 +287,9 @@ impl LocalGrid {
             lo,
             cell,
             dims,
-            cells: vec![vec![]; dims[0] * dims[1] * dims[2]],
+            head: vec![NONE; dims[0] * dims[1] * dims[2]],
+            next: vec![],
+            spheres: vec![],
             r_max: 0.0,
         }
     }
@@ -291,7 +303,10 @@ impl LocalGrid {
     fn insert(&mut self, p: DVec3, r: f64) {
         if let Some(c) = self.coords(p) {
             self.r_max = self.r_max.max(r);
-            self.cells[(c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]].push((p, r));
+            let cell = (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0];
+            self.next.push(self.head[cell]);
+            self.head[cell] = self.spheres.len() as u32;
+            self.spheres.push((p, r));
         }
     }
 
@@ -312,11 +327,13 @@ impl LocalGrid {
                         continue;
                     }
                     let c = (z as usize * self.dims[1] + y as usize) * self.dims[0] + x as usize;
-                    if self.cells[c]
-                        .iter()
-                        .any(|&(s, rs)| (p - s).length_squared() < (r + rs) * (r + rs))
-                    {
-                        return false;
+                    let mut k = self.head[c];
+                    while k != NONE {
+                        let (s, rs) = self.spheres[k as usize];
+                        if (p - s).length_squared() < (r + rs) * (r + rs) {
+                            return false;
+                        }
+                        k = self.next[k as usize];
                     }
                 }
             }

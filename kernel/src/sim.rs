@@ -19,7 +19,7 @@
 use crate::contact::{BondState, BondStatus, Contact, ContactModel, ContactOut};
 use crate::error::{KernelError, Result};
 use crate::factory::Factory;
-use crate::neighbor::{CHUNK, PairList, chunks_per_task};
+use crate::neighbor::{CHUNK, PairList, WallContacts, build_wall_contacts, chunks_per_task};
 use crate::particles::Particles;
 use crate::step_check::{PackingFrequency, loaded_step_warning, packing_frequency};
 use crate::timestep::{BOND_WARN_FRACTION, WARN_FRACTION, rayleigh_time};
@@ -61,18 +61,6 @@ pub struct Setup {
     pub threads: usize,
     /// Particles leaving this box stop the run.
     pub domain: Aabb,
-}
-
-/// Wall contacts of every particle, grouped by particle then (wall, feature).
-#[derive(Debug, Default, Clone)]
-struct WallContacts {
-    start: Vec<u32>,
-    wall: Vec<u16>,
-    feature: Vec<u32>,
-    history: Vec<f64>,
-    /// Force on the particle and contact point (world) of the last step.
-    force: Vec<DVec3>,
-    point: Vec<DVec3>,
 }
 
 pub struct Simulation {
@@ -298,10 +286,7 @@ impl Simulation {
             extra,
             pairs: PairList::empty(stride),
             pair_out: vec![],
-            walls_near: WallContacts {
-                start: vec![0],
-                ..Default::default()
-            },
+            walls_near: WallContacts::empty(),
             ref_position: vec![],
             wall_ref_offset: vec![DVec3::ZERO; nwalls],
             speed_limit,
@@ -945,16 +930,11 @@ impl Simulation {
 
     /// Heap bytes held by particles, the pair list and the wall contacts.
     pub fn heap_bytes(&self) -> usize {
-        let w = &self.walls_near;
         self.particles.heap_bytes()
             + self.pairs.heap_bytes()
             + self.pair_out.capacity() * std::mem::size_of::<ContactOut>()
             + self.ref_position.capacity() * 24
-            + w.start.capacity() * 4
-            + w.wall.capacity() * 2
-            + w.feature.capacity() * 4
-            + w.history.capacity() * 8
-            + (w.force.capacity() + w.point.capacity()) * 24
+            + self.walls_near.heap_bytes()
             // A B-tree entry (two ids and a time) with its share of the node, roughly.
             + self.retired_bonds.len() * 24
     }
@@ -1061,93 +1041,4 @@ fn pair_force(
     }
     let c = Contact::between_particles(p, i, j, d, dist, dt);
     model.evaluate_pair(p.material[i] as usize, p.material[j] as usize, &c, time, h)
-}
-
-/// Lists, for every particle, the wall features within `extra` of its surface, carrying the
-/// history of contacts that were already listed.
-fn build_wall_contacts(
-    p: &Particles,
-    walls: &[Wall],
-    old: &WallContacts,
-    extra: f64,
-    stride: usize,
-    old_of_new: Option<&[u32]>,
-) -> WallContacts {
-    let n = p.len();
-    if walls.is_empty() {
-        return WallContacts {
-            start: vec![0; n + 1],
-            ..Default::default()
-        };
-    }
-    struct Chunk {
-        counts: Vec<u32>,
-        wall: Vec<u16>,
-        feature: Vec<u32>,
-        history: Vec<f64>,
-    }
-    let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .with_max_len(chunks_per_task())
-        .map(|c| {
-            let mut out = Chunk {
-                counts: vec![],
-                wall: vec![],
-                feature: vec![],
-                history: vec![],
-            };
-            let mut hits = vec![];
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                let before = out.wall.len();
-                let oi = old_of_new.map_or(i, |m| m[i] as usize);
-                let old_row = if oi + 1 < old.start.len() {
-                    old.start[oi] as usize..old.start[oi + 1] as usize
-                } else {
-                    0..0
-                };
-                let mut k = old_row.start;
-                for (w, wall) in walls.iter().enumerate() {
-                    if !wall.active {
-                        continue;
-                    }
-                    hits.clear();
-                    wall.shape
-                        .hits(p.position[i] - wall.offset, p.radius[i] + extra, &mut hits);
-                    for h in &hits {
-                        let key = (w as u16, h.feature);
-                        while k < old_row.end && (old.wall[k], old.feature[k]) < key {
-                            k += 1;
-                        }
-                        if k < old_row.end && (old.wall[k], old.feature[k]) == key {
-                            out.history
-                                .extend_from_slice(&old.history[k * stride..(k + 1) * stride]);
-                        } else {
-                            out.history.extend(std::iter::repeat_n(0.0, stride));
-                        }
-                        out.wall.push(w as u16);
-                        out.feature.push(h.feature);
-                    }
-                }
-                out.counts.push((out.wall.len() - before) as u32);
-            }
-            out
-        })
-        .collect();
-    let mut wc = WallContacts {
-        start: Vec::with_capacity(n + 1),
-        ..Default::default()
-    };
-    wc.start.push(0);
-    for c in chunks {
-        for cnt in c.counts {
-            let last = *wc.start.last().unwrap();
-            wc.start.push(last + cnt);
-        }
-        wc.wall.extend(c.wall);
-        wc.feature.extend(c.feature);
-        wc.history.extend(c.history);
-    }
-    wc.force = vec![DVec3::ZERO; wc.wall.len()];
-    wc.point = vec![DVec3::ZERO; wc.wall.len()];
-    wc
 }

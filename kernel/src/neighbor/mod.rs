@@ -3,9 +3,11 @@
 
 pub mod cells;
 pub mod pairs;
+pub(crate) mod wall_list;
 
 pub use cells::CellGrid;
 pub use pairs::PairList;
+pub(crate) use wall_list::{WallContacts, build_wall_contacts};
 
 /// Rows (particles, or pairs in the pair phase) handled by one parallel task. Fixed, so the
 /// work split (and every sum) is the same on any number of threads. Small enough that the
