@@ -261,9 +261,10 @@ impl Factory {
 
 /// A uniform grid of spheres over a box; spheres outside the box are ignored (they cannot
 /// touch a particle placed inside the region). Linked cells in three flat vectors (each
-/// cell's first sphere, each sphere's next), as LAMMPS bins atoms: a vector per cell was one
-/// small allocation per occupied cell, about 100,000 for the settling bench's bed, and glibc
-/// kept their ~10 MB resident long after the grid was dropped (BENCHMARKS.md, tenth sitting).
+/// cell's last sphere, each sphere's predecessor in its cell, the spheres), as LAMMPS bins
+/// atoms: a vector per cell was one small allocation per occupied cell, about 100,000 for
+/// the settling bench's bed, and glibc kept their ~10 MB resident long after the grid was
+/// dropped (BENCHMARKS.md, tenth sitting).
 struct LocalGrid {
     lo: DVec3,
     cell: f64,
