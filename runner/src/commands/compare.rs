@@ -552,22 +552,29 @@ fn analysis_row(c: &Compared) -> compare_stats::Row {
     }
 }
 
-/// Per test: simulated against measured, and the residual against every condition that
-/// varies. Returns the file names written.
+/// Per test and observable: simulated against measured, and the residual against every
+/// condition that varies. One plot per observable, because a test's observables have units
+/// of their own (the funnel's cone angle in degrees, its flow rate in g/s): on one pair of
+/// axes the largest would flatten the rest, under a unit that is only the first one's.
+/// Returns the file names written.
 fn write_plots(dir: &Path, rows: &[compare_stats::Row]) -> Result<Vec<String>> {
     let mut names = vec![];
-    let mut tests: Vec<&str> = vec![];
+    let mut groups: Vec<(&str, &str)> = vec![];
     for r in rows {
-        if !tests.contains(&r.test.as_str()) {
-            tests.push(&r.test);
+        let key = (r.test.as_str(), r.observable.as_str());
+        if !groups.contains(&key) {
+            groups.push(key);
         }
     }
-    for test in tests {
-        let mine: Vec<&compare_stats::Row> = rows.iter().filter(|r| r.test == test).collect();
+    for (test, observable) in groups {
+        let mine: Vec<&compare_stats::Row> = rows
+            .iter()
+            .filter(|r| r.test == test && r.observable == observable)
+            .collect();
         if mine.iter().all(|r| r.simulated.is_none()) {
             continue;
         }
-        let name = format!("simulated-vs-measured-{test}.svg");
+        let name = format!("simulated-vs-measured-{test}-{observable}.svg");
         let svg = compare_plot::simulated_vs_measured_svg(&mine).map_err(|e| anyhow!(e))?;
         std::fs::write(dir.join(&name), svg)?;
         names.push(name);
@@ -581,7 +588,7 @@ fn write_plots(dir: &Path, rows: &[compare_stats::Row]) -> Result<Vec<String>> {
             if xs.len() < 2 {
                 continue;
             }
-            let name = format!("residual-{test}-{cond}.svg");
+            let name = format!("residual-{test}-{observable}-{cond}.svg");
             let svg = compare_plot::residuals_svg(&mine, cond).map_err(|e| anyhow!(e))?;
             std::fs::write(dir.join(&name), svg)?;
             names.push(name);
@@ -715,8 +722,58 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
 
 #[cfg(test)]
 mod tests {
-    use super::condition_seed;
+    use super::{compare_stats, condition_seed, write_plots};
     use std::collections::BTreeMap;
+
+    /// The funnel test's readings have units of their own: each gets its own plots, under
+    /// its own name and unit, holding only its own rows.
+    #[test]
+    fn each_observable_of_a_test_gets_plots_of_its_own() {
+        let row = |observable: &str, unit: &str, moisture: f64, measured: f64| compare_stats::Row {
+            test: "repose".into(),
+            observable: observable.into(),
+            unit: unit.into(),
+            conditions: at(moisture),
+            measured,
+            simulated: Some(measured * 1.1),
+            std_error: Some(0.1),
+        };
+        let rows = vec![
+            row("heap_cone_angle_deg", "deg", 3.0, 38.0),
+            row("funnel_flow_rate_g_s", "g/s", 3.0, 480.0),
+            row("heap_cone_angle_deg", "deg", 12.0, 43.0),
+            row("funnel_flow_rate_g_s", "g/s", 12.0, 390.0),
+        ];
+        let dir = std::env::temp_dir().join(format!("tilth-compare-plots-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let names = write_plots(&dir, &rows).unwrap();
+        assert_eq!(
+            names,
+            [
+                "simulated-vs-measured-repose-heap_cone_angle_deg.svg",
+                "residual-repose-heap_cone_angle_deg-moisture_pct.svg",
+                "simulated-vs-measured-repose-funnel_flow_rate_g_s.svg",
+                "residual-repose-funnel_flow_rate_g_s-moisture_pct.svg",
+            ]
+        );
+        let read = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();
+        let cone = read(&names[0]);
+        assert!(
+            cone.contains("measured heap_cone_angle_deg (deg)"),
+            "{cone}"
+        );
+        assert!(
+            !cone.contains("g/s"),
+            "the cone angle's plot holds another reading"
+        );
+        let flow = read(&names[2]);
+        assert!(
+            flow.contains("measured funnel_flow_rate_g_s (g/s)"),
+            "{flow}"
+        );
+        assert!(read(&names[3]).contains("simulated - measured (g/s)"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     fn at(moisture: f64) -> BTreeMap<String, f64> {
         BTreeMap::from([("moisture_pct".to_string(), moisture)])

@@ -71,7 +71,10 @@ pub fn simulated_vs_measured_svg(rows: &[&Row]) -> Result<String, String> {
         let root = SVGBackend::with_string(&mut svg, (600, 560)).into_drawing_area();
         root.fill(&WHITE).map_err(err(what))?;
         let mut chart = ChartBuilder::on(&root)
-            .caption(format!("{}: simulated vs measured", first.test), (FONT, 17))
+            .caption(
+                format!("{} {}: simulated vs measured", first.test, first.observable),
+                (FONT, 17),
+            )
             .margin(15)
             .x_label_area_size(45)
             .y_label_area_size(60)
@@ -121,7 +124,10 @@ pub fn residuals_svg(rows: &[&Row], condition: &str) -> Result<String, String> {
         root.fill(&WHITE).map_err(err(what))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
-                format!("{}: residual against {condition}", first.test),
+                format!(
+                    "{} {}: residual against {condition}",
+                    first.test, first.observable
+                ),
                 (FONT, 17),
             )
             .margin(15)
