@@ -2,10 +2,10 @@
 //! history, one HTML page that works offline (`PROJECT_DIR/report.html`).
 //!
 //! The compare runs are found by their `compare.json` (up to four levels down) and ordered by
-//! when they were made (`created`, else the file's modification time). The page has: a table
-//! of the error per observable for each run and model, the RMSE history of every observable
-//! as a chart, each run's summary in words, and each plot of the runs side by side, oldest
-//! first, so that the effect of a model change is seen at a glance. Plots are inlined (SVG);
+//! when they were made (`created`, else the file's modification time). The page has: the runs
+//! (model, data, replicates), the error of every observable with one column per run, the RMSE
+//! history of every observable as a chart, each run's summary in words, and each plot of the
+//! runs side by side, oldest first, so that the effect of a model change is seen at a glance. Plots are inlined (SVG);
 //! nothing is fetched.
 
 use anyhow::{Context, Result, bail};
@@ -119,7 +119,7 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tilth report</title>\n<style>\
          body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}\
          td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#f3f3f3}\
-         td.l,th.l{text-align:left}.row{display:flex;gap:12px;overflow-x:auto;align-items:flex-start}\
+         td.l,th.l{text-align:left}td.path{overflow-wrap:anywhere;max-width:36em}.row{display:flex;gap:12px;overflow-x:auto;align-items:flex-start}.wrap{flex-wrap:wrap}\
          .fig{flex:0 0 auto;text-align:center;font-size:13px}.fig svg{max-width:480px;height:auto}\
          .better{color:#2a7a2a}.worse{color:#b02020}</style></head><body>\n",
     );
@@ -130,25 +130,40 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         if runs.len() == 1 { "" } else { "s" }
     );
 
-    html += "<h2>Error per observable</h2>\n<table><tr><th>#</th><th class=\"l\">run</th><th class=\"l\">model</th><th class=\"l\">data</th><th>replicates</th>";
-    for (o, u) in &observables {
-        html += &format!(
-            "<th>{} RMSE ({})</th><th>mean rel. error</th>",
-            escape(o),
-            escape(u)
-        );
-    }
-    html += "</tr>\n";
+    // The runs, then the errors with one column per run: a project's history grows in runs,
+    // and a row per observable keeps the page as wide as the number of runs (with the paths
+    // in their own table, four observables no longer push it off the screen sideways).
+    html += "<h2>Runs</h2>\n<table><tr><th>#</th><th class=\"l\">run</th><th class=\"l\">model</th><th class=\"l\">data</th><th>replicates</th></tr>\n";
     for (k, r) in runs.iter().enumerate() {
         html += &format!(
-            "<tr><td>{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td>",
+            "<tr><td>{}</td><td class=\"l\">{}</td><td class=\"l path\">{}</td><td class=\"l path\">{}</td><td>{}</td></tr>\n",
             k + 1,
             escape(&r.label),
             escape(r.json["model"].as_str().unwrap_or("?")),
             escape(r.json["data"].as_str().unwrap_or("?")),
             r.json["replicates"]
         );
-        for o in observables.keys() {
+    }
+    html += "</table>\n";
+
+    html += "<h2>Error per observable</h2>\n<p>RMSE in the observable's unit, and below it the mean relative error; \
+             green where a run's RMSE fell from the run before it, red where it rose.</p>\n\
+             <table><tr><th class=\"l\">observable</th>";
+    for (k, r) in runs.iter().enumerate() {
+        html += &format!("<th>{}. {}</th>", k + 1, escape(&r.label));
+    }
+    html += "</tr>\n";
+    for (o, u) in &observables {
+        html += &format!(
+            "<tr><td class=\"l\">{}{}</td>",
+            escape(o),
+            if u.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", escape(u))
+            }
+        );
+        for (k, r) in runs.iter().enumerate() {
             let now = rmse(r, o);
             let before = k.checked_sub(1).and_then(|p| rmse(&runs[p], o));
             let class = match (now, before) {
@@ -157,7 +172,7 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
                 _ => "",
             };
             html += &format!(
-                "<td{class}>{}</td><td>{}</td>",
+                "<td{class}>{}<br><small>{}</small></td>",
                 now.map_or("-".into(), |v| format!("{v:.4}")),
                 mre(r, o).map_or("-".into(), |v| format!("{:.1} %", 100.0 * v))
             );
@@ -166,7 +181,9 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
     }
     html += "</table>\n";
 
-    html += "<h2>RMSE history</h2>\n<div class=\"row\">\n";
+    // The charts wrap onto the next line (the plots further down scroll instead, to keep the
+    // runs of one plot side by side).
+    html += "<h2>RMSE history</h2>\n<div class=\"row wrap\">\n";
     for (o, u) in &observables {
         let values: Vec<f64> = runs
             .iter()

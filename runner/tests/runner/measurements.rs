@@ -239,8 +239,17 @@ fn report_puts_a_projects_compare_runs_side_by_side() {
     let v2 = html.find("models/v2.toml").unwrap();
     assert!(v1 < v2, "oldest first");
     assert!(
-        html.contains("<td class=\"better\">2.5000</td>"),
-        "the fall is marked"
+        html.contains("<td class=\"better\">2.5000<br><small>7.1 %</small></td>"),
+        "the fall is marked, with the mean relative error under the RMSE"
+    );
+    // One row per observable with its unit, one column per run.
+    assert!(
+        html.contains("<td class=\"l\">repose_angle_deg (deg)</td><td>8.1000<br><small>23.1 %</small></td><td class=\"better\">"),
+        "a row per observable"
+    );
+    assert!(
+        html.contains("<th>1. v1</th><th>2. v2</th>"),
+        "a column per run"
     );
     assert!(
         html.contains("r=\"4\"") && html.contains("r=\"3\""),
