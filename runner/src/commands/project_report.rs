@@ -54,6 +54,16 @@ fn find(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> Result<()> {
     Ok(())
 }
 
+/// tilth's own SVG, ready to inline: anything before the first tag (an XML prolog) removed.
+fn inline_svg(svg: &str) -> &str {
+    let svg = svg.trim_start_matches(|c| c != '<');
+    if svg.starts_with("<?xml") {
+        svg.split_once("?>").map_or(svg, |(_, rest)| rest)
+    } else {
+        svg
+    }
+}
+
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -225,27 +235,46 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         }
     }
     html += "<h2>Plots, run by run</h2>\n";
+    // A plot a run lists but that is not beside its compare.json (a project copied without
+    // its SVGs) is named once at the end, not drawn as an empty heading.
+    let mut missing = vec![];
     for name in &names {
-        html += &format!("<h3>{}</h3>\n<div class=\"row\">\n", escape(name));
+        let mut figs = String::new();
+        let mut found = 0;
         for (k, r) in runs.iter().enumerate() {
-            let file = r.dir.join(name);
-            let Ok(svg) = std::fs::read_to_string(&file) else {
-                continue;
-            };
-            // The plots are tilth's own SVG; strip an XML prolog if there is one.
-            let svg = svg.trim_start_matches(|c| c != '<');
-            let svg = if svg.starts_with("<?xml") {
-                svg.split_once("?>").map_or(svg, |(_, rest)| rest)
-            } else {
-                svg
-            };
-            html += &format!(
-                "<div class=\"fig\">{svg}<br>{}. {}</div>\n",
-                k + 1,
-                escape(&r.label)
-            );
+            let listed = r.json["plots"]
+                .as_array()
+                .is_some_and(|a| a.iter().any(|p| p.as_str() == Some(name.as_str())));
+            let caption = format!("{}. {}", k + 1, escape(&r.label));
+            match std::fs::read_to_string(r.dir.join(name)) {
+                Ok(svg) => {
+                    found += 1;
+                    figs += &format!(
+                        "<div class=\"fig\">{}<br>{caption}</div>\n",
+                        inline_svg(&svg)
+                    );
+                }
+                // Keep the runs in their columns: a run that made the plot but lost it.
+                Err(_) if listed => {
+                    figs += &format!("<div class=\"fig\">(file not found)<br>{caption}</div>\n")
+                }
+                Err(_) => {}
+            }
         }
-        html += "</div>\n";
+        if found == 0 {
+            missing.push(escape(name));
+            continue;
+        }
+        html += &format!(
+            "<h3>{}</h3>\n<div class=\"row\">\n{figs}</div>\n",
+            escape(name)
+        );
+    }
+    if !missing.is_empty() {
+        html += &format!(
+            "<p>Listed by the runs' compare.json but found beside none of them: {}.</p>\n",
+            missing.join(", ")
+        );
     }
     html += "</body></html>\n";
 

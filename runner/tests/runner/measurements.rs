@@ -219,6 +219,10 @@ fn report_puts_a_projects_compare_runs_side_by_side() {
             svg.replace("MARK", mark),
         )
         .unwrap();
+        // A plot that only the first run still has, and one that neither has.
+        if name == "v1" {
+            std::fs::write(d.join("sim.svg"), svg.replace("MARK", "7")).unwrap();
+        }
         let json = serde_json::json!({
             "created": created,
             "model": format!("models/{name}.toml"),
@@ -228,7 +232,7 @@ fn report_puts_a_projects_compare_runs_side_by_side() {
             "observables": {"repose_angle_deg": {"rmse": rmse, "mean_relative_error": rmse / 35.0, "n": 4}},
             "verdicts": [{"observable": "repose_angle_deg", "unit": "deg"}],
             "summary": format!("- **repose** (repose_angle_deg): RMSE {rmse} deg.\n"),
-            "plots": ["residual-repose-moisture_pct.svg"],
+            "plots": ["residual-repose-moisture_pct.svg", "sim.svg", "gone.svg"],
         });
         std::fs::write(d.join("compare.json"), json.to_string()).unwrap();
     }
@@ -254,6 +258,15 @@ fn report_puts_a_projects_compare_runs_side_by_side() {
     assert!(
         html.contains("r=\"4\"") && html.contains("r=\"3\""),
         "both runs' plots inlined"
+    );
+    assert!(
+        html.contains("r=\"7\"") && html.contains("(file not found)<br>2. v2"),
+        "a plot one run lost keeps its place in the row"
+    );
+    assert!(
+        !html.contains("<h3>gone.svg</h3>")
+            && html.contains("found beside none of them: gone.svg."),
+        "a plot no run has is named, not drawn as an empty heading"
     );
     assert!(
         !html.contains("src=\"http") && !html.contains("href=\"http"),
