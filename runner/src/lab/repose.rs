@@ -3,9 +3,11 @@
 //! A steel funnel (inlet 135 mm, outlet 20 mm, 140 mm high) stands coaxially above a steel
 //! tray (a ring knife of 61.8 mm diameter and 20 mm height) on a stand 100 mm above a steel
 //! floor. Soil particles are generated in the funnel's upper part at `rate` until `mass_g`
-//! is in, flow out, and heap on the tray; what overflows falls to the floor. The run ends when the heap is at rest:
-//! mean particle speed below `rest_speed` and the heap's cone angle steady to `rest_angle`
-//! degrees over `rest_time` seconds (not after a fixed time), or at `max_time` with a warning.
+//! is in, flow out, and heap on the tray; what overflows falls to the floor. The run ends
+//! when the heap is at rest: mean speed of the particles between the outlet and the tray's
+//! top below `rest_speed` (the overflow on the floor left out) and the heap's cone angle
+//! steady to `rest_angle` degrees over `rest_time` seconds (not after a fixed time), or at
+//! `max_time` with a warning.
 
 use super::discharge::Discharge;
 use super::experiment::{Built, Common, rayleigh_time, scene::*, soil_density};
@@ -61,7 +63,8 @@ pub struct ReposeParams {
     /// stand"). 100 mm holds any overflow of a few hundred grams below the rim.
     #[serde(default = "default_stand_height")]
     pub stand_height: f64,
-    /// At rest: mean particle speed below this, m/s.
+    /// At rest: mean speed of the particles between the outlet and the tray's top below
+    /// this, m/s.
     #[serde(default = "default_rest_speed")]
     pub rest_speed: f64,
     /// At rest: the cone angle moved less than this, degrees, over `rest_time`.
@@ -383,9 +386,12 @@ impl ReposeProtocol {
             return false;
         }
         // Below the outlet: what is left in the funnel at rest is residue (or, when the heap
-        // has grown up to the outlet, the soil the heap holds back).
+        // has grown up to the outlet, the soil the heap holds back). Above the tray's top
+        // less a grain: what has fallen past the tray is overflow on its way to the floor,
+        // which no longer touches the heap and may bounce about there for a while.
+        let floor_of_heap = self.tray.centre[2] - self.diameter;
         let (sum, n) = (0..p.len())
-            .filter(|&k| p.position[k].z < self.z_out)
+            .filter(|&k| p.position[k].z < self.z_out && p.position[k].z > floor_of_heap)
             .fold((0.0, 0usize), |(s, n), k| {
                 (s + p.velocity[k].length(), n + 1)
             });
