@@ -17,8 +17,7 @@ import numpy as np
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 
-# foxglove.PackedElementField numeric types tilth writes.
-DTYPES = {5: "<i4", 6: "<u4", 7: "<f4", 8: "<f8"}
+from check_mcap import NUMERIC_TYPES
 
 
 def main(argv=None) -> int:
@@ -46,7 +45,7 @@ def main(argv=None) -> int:
     fields = list(msg.fields)
     arr = np.frombuffer(msg.data, dtype=np.dtype({
         "names": [f.name for f in fields],
-        "formats": [DTYPES[f.type] for f in fields],
+        "formats": [NUMERIC_TYPES[f.type][0] for f in fields],
         "offsets": [f.offset for f in fields],
         "itemsize": msg.point_stride,
     }))

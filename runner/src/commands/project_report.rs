@@ -5,8 +5,8 @@
 //! when they were made (`created`, else the file's modification time). The page has: the runs
 //! (model, data, replicates), the error of every observable with one column per run, the RMSE
 //! history of every observable as a chart, each run's summary in words, and each plot of the
-//! runs side by side, oldest first, so that the effect of a model change is seen at a glance. Plots are inlined (SVG);
-//! nothing is fetched.
+//! runs side by side, oldest first, so that the effect of a model change is seen at a glance.
+//! Plots are inlined (SVG); nothing is fetched.
 
 use anyhow::{Context, Result, bail};
 use clap::Args;

@@ -2,11 +2,11 @@
 //!
 //! A steel funnel (inlet 135 mm, outlet 20 mm, 140 mm high) stands coaxially above a steel
 //! tray (a ring knife of 61.8 mm diameter and 20 mm height) on a steel floor, or on a stand
-//! `stand_height` above it. Soil particles are generated in the funnel's upper part at `rate` until `mass_g`
-//! is in, flow out, and heap on the tray; what overflows falls to the floor. The run ends
-//! when the heap is at rest: mean particle speed below `rest_speed` and the heap's cone angle
-//! steady to `rest_angle` degrees over `rest_time` seconds (not after a fixed time), or at
-//! `max_time` with a warning.
+//! `stand_height` above it. Soil particles are generated in the funnel's upper part at
+//! `rate` until `mass_g` is in, flow out, and heap on the tray; what overflows falls to the
+//! floor. The run ends when the heap is at rest: mean particle speed below `rest_speed` and
+//! the heap's cone angle steady to `rest_angle` degrees over `rest_time` seconds (not after a
+//! fixed time), or at `max_time` with a warning.
 
 use super::discharge::Discharge;
 use super::experiment::{Built, Common, rayleigh_time, scene::*, soil_density};
