@@ -422,6 +422,45 @@ impl ReposeProtocol {
 }
 
 impl ReposeProtocol {
+    /// Why a run that reached `max_time` was not at rest, in words. Either the soil below the
+    /// outlet still moves on average (then more time may settle it), or it is at rest on
+    /// average and a few grains keep moving: in a cohesive (JKR) model some grains rock or
+    /// orbit for ever, and as one near the apex passes [`observe::HEAP_SPEED`] the cone angle
+    /// flips between two values, so the angle never holds still and more time does not help
+    /// (docs/li2022-compare.md, "Grains that never stop").
+    fn not_at_rest(&self, sim: &Simulation) -> String {
+        let p = &sim.particles;
+        let below: Vec<usize> = (0..p.len()).filter(|&k| p.position[k].z < self.z_out).collect();
+        let speeds: Vec<f64> = below.iter().map(|&k| p.velocity[k].length()).collect();
+        let mean = speeds.iter().sum::<f64>() / speeds.len().max(1) as f64;
+        let since = sim.time - self.p.rest_time;
+        let (lo, hi) = self
+            .angles
+            .iter()
+            .filter(|(t, _)| *t >= since)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, a)| (lo.min(*a), hi.max(*a)));
+        let movers = speeds.iter().filter(|&&v| v > observe::HEAP_SPEED).count();
+        let fastest = speeds.iter().copied().fold(0.0, f64::max);
+        if below.is_empty() || mean > self.p.rest_speed || !(hi >= lo) {
+            return format!(
+                "the heap was not at rest at max_time = {} s (mean speed below the outlet {mean:.2e} m/s, rest_speed {}); raise repose.max_time",
+                self.p.max_time, self.p.rest_speed
+            );
+        }
+        format!(
+            "the heap was not at rest at max_time = {} s: the soil below the outlet is at rest on average \
+             (mean speed {mean:.2e} m/s, rest_speed {}), but the cone angle moved between {lo:.2} and {hi:.2} deg over the last {} s \
+             (rest_angle {}), with {movers} grain(s) faster than {} m/s (the fastest {fastest:.3} m/s). If those grains rock or orbit \
+             for ever, more time will not settle the heap: the angle flips as they pass that speed and the reading is one of its values \
+             (docs/li2022-compare.md, \"Grains that never stop\")",
+            self.p.max_time,
+            self.p.rest_speed,
+            self.p.rest_time,
+            self.p.rest_angle,
+            observe::HEAP_SPEED,
+        )
+    }
+
     /// Whether the heap on the tray has grown up to the funnel outlet: its top is there, and
     /// there is enough soil below the outlet to build that tall a cone even at 80 degrees
     /// (V = pi/3 h^3 cot^2 80, at a solid fraction of 0.5). Without the second test, a few
@@ -566,7 +605,7 @@ impl Protocol for ReposeProtocol {
             "funnel_residue_g": self.residue_g(sim),
             "heap_reached_outlet": self.reached_outlet(sim),
             "warning": if self.settled_at.is_none() {
-                Some(format!("the heap was not at rest at max_time = {} s; raise repose.max_time", self.p.max_time))
+                Some(self.not_at_rest(sim))
             } else if self.reached_outlet(sim) {
                 Some(format!("the heap grew up to the funnel outlet ({} m above the tray): its angle is cut there and is a lower bound; raise repose.drop_height", self.p.drop_height))
             } else { None },

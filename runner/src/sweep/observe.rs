@@ -50,6 +50,10 @@ pub fn find_tray(names: &[String], shapes: &[WallShape]) -> Option<Tray> {
     }
 }
 
+/// A grain slower than this (m/s) counts as part of the heap; a faster one is taken for a
+/// grain still falling onto it.
+pub const HEAP_SPEED: f64 = 0.05;
+
 /// Measures the heap on `tray` now.
 pub fn heap(sim: &Simulation, tray: Tray) -> Heap {
     let p = &sim.particles;
@@ -62,7 +66,7 @@ pub fn heap(sim: &Simulation, tray: Tray) -> Heap {
         let r = p.radius[k];
         let inside = (x.x - cx).hypot(x.y - cy) <= tray.radius;
         // Resting on the tray or on particles on it; falling particles far above are ignored.
-        if inside && x.z > cz && x.z < tray.ceiling && p.velocity[k].length() < 0.05 {
+        if inside && x.z > cz && x.z < tray.ceiling && p.velocity[k].length() < HEAP_SPEED {
             top = top.max(x.z + r - cz);
             n += 1;
             mass += p.mass[k];

@@ -245,6 +245,68 @@ fn a_jammed_funnel_is_an_error_not_a_heap() {
     );
 }
 
+/// A run stopped by `max_time` says why it was not at rest: here the pour is still going, so
+/// the soil below the outlet moves on average and more time is the answer.
+#[test]
+fn a_funnel_stopped_before_rest_says_why() {
+    let dir = std::env::temp_dir().join(format!("tilth-early-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml");
+    let file = dir.join("early.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "format_version = 1\nexperiment = \"repose\"\nmodel = {:?}\ncoarse = true\n[conditions]\nmoisture_pct = 6\n[repose]\nmax_time = 0.15\n",
+            model.display().to_string()
+        ),
+    )
+    .unwrap();
+    let out = tilth()
+        .args(["run", "--quiet", "--json", "--out"])
+        .arg(dir.join("out"))
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let e = &summary["experiment"];
+    assert_eq!(e["settled"], false, "{e}");
+    let warning = e["warning"].as_str().unwrap();
+    assert!(
+        warning.starts_with("the heap was not at rest at max_time = 0.15 s (mean speed below the outlet ")
+            && warning.ends_with("m/s, rest_speed 0.005); raise repose.max_time"),
+        "{warning}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A heap at rest on average whose angle flips (a grain rocking on its apex for ever:
+/// docs/rockers/rocker.toml, docs/li2022-compare.md "Grains that never stop") is told apart
+/// from one still moving: the warning names the flip and the moving grain, not more time.
+#[test]
+fn a_heap_whose_angle_flips_is_told_apart_from_one_still_moving() {
+    let dir = std::env::temp_dir().join(format!("tilth-rocker-{}", std::process::id()));
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/rockers/rocker.toml");
+    let out = tilth()
+        .args(["run", "--quiet", "--json", "--out"])
+        .arg(&dir)
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let e = &summary["experiment"];
+    assert_eq!(e["settled"], false, "{e}");
+    let warning = e["warning"].as_str().unwrap();
+    assert!(
+        warning.contains("the soil below the outlet is at rest on average")
+            && warning.contains("1 grain(s) faster than 0.05 m/s")
+            && !warning.contains("raise repose.max_time"),
+        "{warning}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The funnel's skin is a speed setting: a run with the kernel's usual 0.2 diameters and one
 /// with the funnel's default list different pairs out of contact, rebuild the list at
 /// different steps, and end in the same state to the bit.
