@@ -1,5 +1,9 @@
 //! `twisting` against its formulas: the spring k_tw = 4 G* a^3 below the cap (2/3) mu_tw a L,
-//! and a spinning sphere on a floor decelerating at M_max / I.
+//! and a spinning sphere on a floor decelerating at M_max / I. And why a model needs it: two
+//! cohesive grains standing on one floor contact, set turning about the vertical, spin for
+//! ever without it (no other law opposes a spin about a contact normal: EPSD's rolling
+//! velocity leaves out the normal part), and stop with it. Such pairs are the funnel test's
+//! grains that never stop (docs/li2022-compare.md).
 
 mod common;
 use common::*;
@@ -121,4 +125,60 @@ fn a_spinning_sphere_on_a_floor_decelerates_at_the_cap_over_its_inertia() {
         (measured - expected).abs() < 0.01 * expected,
         "deceleration {measured} vs {expected}"
     );
+}
+
+/// Two JKR grains of the study's soil (surface energy 0.36 J/m^2, rolling friction 0.15 with
+/// EPSD, as models/li2022.toml): one on the floor, one on it leaning 0.2 rad off the
+/// vertical, pushed sideways at 0.05 m/s so that the pair turns about the vertical through
+/// the lower grain's floor contact. Returns the upper grain's speed at 0.1 s and at 1.1 s.
+fn turning_pair(twisting_friction: Option<f64>) -> (f64, f64) {
+    let mut spec = spec("jkr", Some("restitution"), Some("mindlin"), Some("epsd"));
+    let mut kv = vec![
+        ("restitution", 0.45),
+        ("friction", 0.8),
+        ("rolling_friction", 0.15),
+        ("surface_energy", 0.36),
+    ];
+    if let Some(mu) = twisting_friction {
+        spec.extra.push("twisting".into());
+        kv.push(("twisting_friction", mu));
+    }
+    let m = model(&spec, &kv);
+    let mut p = tilth_kernel::particles::Particles::default();
+    let lean: f64 = 0.2;
+    p.push(DVec3::new(0.0, 0.0, R), DVec3::ZERO, R, RHO, 0);
+    p.push(
+        DVec3::new(2.0 * R * lean.sin(), 0.0, R + 2.0 * R * lean.cos()),
+        DVec3::new(0.0, 0.05, 0.0),
+        R,
+        RHO,
+        0,
+    );
+    let dt = 5e-6;
+    let mut s = sim(m, p, vec![floor()], dt, DVec3::new(0.0, 0.0, -9.81), 1);
+    let upper = |s: &tilth_kernel::sim::Simulation| {
+        let k = s.particles.id.iter().position(|&i| i == 1).unwrap();
+        s.particles.velocity[k].length()
+    };
+    s.run(20_000).unwrap(); // 0.1 s: the push shared out, the pair turning
+    let early = upper(&s);
+    s.run(200_000).unwrap(); // 1 s more
+    (early, upper(&s))
+}
+
+#[test]
+fn a_cohesive_pair_on_one_floor_contact_turns_for_ever_without_twisting_resistance() {
+    let (early, late) = turning_pair(None);
+    // Nothing opposes the turn: its speed holds (a rigid turn: no contact slides or rolls).
+    assert!(early > 1e-3, "the pair did not turn: {early} m/s at 0.1 s");
+    assert!(
+        (late - early).abs() < 0.01 * early,
+        "the turn slowed from {early} to {late} m/s over 1 s"
+    );
+}
+
+#[test]
+fn twisting_resistance_stops_the_turning_pair() {
+    let (early, late) = turning_pair(Some(0.5));
+    assert!(late < 1e-6, "still at {late} m/s after 1.1 s ({early} m/s at 0.1 s)");
 }
