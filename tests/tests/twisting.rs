@@ -180,5 +180,8 @@ fn a_cohesive_pair_on_one_floor_contact_turns_for_ever_without_twisting_resistan
 #[test]
 fn twisting_resistance_stops_the_turning_pair() {
     let (early, late) = turning_pair(Some(0.5));
-    assert!(late < 1e-6, "still at {late} m/s after 1.1 s ({early} m/s at 0.1 s)");
+    assert!(
+        late < 1e-6,
+        "still at {late} m/s after 1.1 s ({early} m/s at 0.1 s)"
+    );
 }

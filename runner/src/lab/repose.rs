@@ -393,7 +393,9 @@ impl ReposeProtocol {
         let p = &sim.particles;
         let (sum, n) = (0..p.len())
             .filter(|&k| p.position[k].z < self.z_out)
-            .fold((0.0, 0usize), |(s, n), k| (s + p.velocity[k].length(), n + 1));
+            .fold((0.0, 0usize), |(s, n), k| {
+                (s + p.velocity[k].length(), n + 1)
+            });
         (n > 0).then(|| sum / n as f64)
     }
 
@@ -461,7 +463,9 @@ impl ReposeProtocol {
     /// (docs/li2022-compare.md, "Grains that never stop").
     fn not_at_rest(&self, sim: &Simulation) -> String {
         let p = &sim.particles;
-        let below: Vec<usize> = (0..p.len()).filter(|&k| p.position[k].z < self.z_out).collect();
+        let below: Vec<usize> = (0..p.len())
+            .filter(|&k| p.position[k].z < self.z_out)
+            .collect();
         let speeds: Vec<f64> = below.iter().map(|&k| p.velocity[k].length()).collect();
         let mean = speeds.iter().sum::<f64>() / speeds.len().max(1) as f64;
         let since = sim.time - self.p.rest_time;
@@ -469,7 +473,9 @@ impl ReposeProtocol {
             .angles
             .iter()
             .filter(|(t, _)| *t >= since)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, a)| (lo.min(*a), hi.max(*a)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, a)| {
+                (lo.min(*a), hi.max(*a))
+            });
         let movers = speeds.iter().filter(|&&v| v > observe::HEAP_SPEED).count();
         let fastest = speeds.iter().copied().fold(0.0, f64::max);
         if below.is_empty() || mean > self.p.rest_speed || !(hi >= lo) {

@@ -267,14 +267,19 @@ fn a_funnel_stopped_before_rest_says_why() {
         .arg(&file)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let e = &summary["experiment"];
     assert_eq!(e["settled"], false, "{e}");
     let warning = e["warning"].as_str().unwrap();
     assert!(
-        warning.starts_with("the heap was not at rest at max_time = 0.15 s (mean speed below the outlet ")
-            && warning.ends_with("m/s, rest_speed 0.005); raise repose.max_time"),
+        warning.starts_with(
+            "the heap was not at rest at max_time = 0.15 s (mean speed below the outlet "
+        ) && warning.ends_with("m/s, rest_speed 0.005); raise repose.max_time"),
         "{warning}"
     );
     let _ = std::fs::remove_dir_all(&dir);
@@ -333,7 +338,11 @@ fn rocker(max_time: Option<f64>) -> serde_json::Value {
         .arg(&file)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     summary["experiment"].clone()
