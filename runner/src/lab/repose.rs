@@ -6,9 +6,9 @@
 //! `rate` until `mass_g` is in, flow out, and heap on the tray; what overflows falls to the
 //! floor. The run ends when the heap is at rest: mean particle speed below `rest_speed` and
 //! the heap's cone angle steady to `rest_angle` degrees over `rest_time` seconds, or the mean
-//! speed without the fastest 1 % under a fifth of `rest_speed` for `rest_time` whatever the
-//! angle does (grains that spin for ever flip it); not after a fixed time. At `max_time` it
-//! stops with a warning that says which of those failed.
+//! speed under a fifth of `rest_speed` for `rest_time` whatever the angle does (grains that
+//! spin for ever flip it); not after a fixed time. At `max_time` it stops with a warning
+//! that says which of those failed.
 
 use super::discharge::Discharge;
 use super::experiment::{Built, Common, rayleigh_time, scene::*, soil_density};
@@ -323,7 +323,7 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
             z_out,
             outlet,
             angles: vec![],
-            still_speeds: vec![],
+            mean_speeds: vec![],
             settled_at: None,
             check_every: 0.02,
             next_check: 0.0,
@@ -334,14 +334,9 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
     })
 }
 
-/// The "still" path to rest: the mean speed below the outlet, its fastest
-/// [`STILL_LEFT_OUT`] left out, under this fraction of `rest_speed` for `rest_time` (see
-/// `ReposeProtocol::at_rest`).
+/// The "still" path to rest: the mean speed below the outlet under this fraction of
+/// `rest_speed` for `rest_time` (see `ReposeProtocol::at_rest`).
 const STILL_FRACTION: f64 = 0.2;
-
-/// The share of the grains below the outlet, the fastest, that the still path leaves out: the
-/// few that spin for ever (up to 14 of 2,000 in the fresh-draws study's runs), not a flow.
-const STILL_LEFT_OUT: f64 = 0.01;
 
 /// Runs a repose test to rest.
 pub struct ReposeProtocol {
@@ -354,9 +349,8 @@ pub struct ReposeProtocol {
     outlet: f64,
     /// (time, cone angle) at each check.
     angles: Vec<(f64, f64)>,
-    /// (time, mean speed of the grains below the outlet without the fastest
-    /// [`STILL_LEFT_OUT`], m/s) at each check.
-    still_speeds: Vec<(f64, f64)>,
+    /// (time, mean speed of the grains below the outlet, m/s) at each check.
+    mean_speeds: Vec<(f64, f64)>,
     settled_at: Option<f64>,
     check_every: f64,
     next_check: f64,
@@ -405,19 +399,6 @@ impl ReposeProtocol {
         (n > 0).then(|| sum / n as f64)
     }
 
-    /// The mean speed (m/s) of the grains below the outlet without the fastest
-    /// [`STILL_LEFT_OUT`] of them, `None` when there are none.
-    fn still_speed_below_outlet(&self, sim: &Simulation) -> Option<f64> {
-        let p = &sim.particles;
-        let mut v: Vec<f64> = (0..p.len())
-            .filter(|&k| p.position[k].z < self.z_out)
-            .map(|k| p.velocity[k].length())
-            .collect();
-        v.sort_by(f64::total_cmp);
-        let kept = v.len() - (v.len() as f64 * STILL_LEFT_OUT).floor() as usize;
-        (kept > 0).then(|| v[..kept].iter().sum::<f64>() / kept as f64)
-    }
-
     fn at_rest(&self, sim: &Simulation) -> bool {
         let p = &sim.particles;
         if p.len() < self.count || sim.time < self.fill_time {
@@ -442,18 +423,18 @@ impl ReposeProtocol {
                 return false;
             }
         }
-        // Still: the soil below the outlet, its fastest STILL_LEFT_OUT left out, moved slower
-        // than STILL_FRACTION x rest_speed on average at every check for rest_time. Then the
-        // heap is at rest even if its angle still flips: a grain hanging on one contact can
-        // spin about that contact's normal for ever, since no law of a model without twisting
-        // resistance opposes that spin (tests/tests/twisting.rs), and as it passes
-        // observe::HEAP_SPEED the angle flips (docs/li2022-compare.md, "Grains that never
-        // stop"). A heap that is still flowing or creeping moves faster than this on average.
+        // Still: the soil below the outlet moved slower than STILL_FRACTION x rest_speed on
+        // average at every check for rest_time. Then the heap is at rest even if its angle
+        // still flips: a grain hanging on one contact can spin about that contact's normal
+        // for ever, since no law of a model without twisting resistance opposes that spin
+        // (tests/tests/twisting.rs), and as it passes observe::HEAP_SPEED the angle flips
+        // (docs/li2022-compare.md, "Grains that never stop"). A heap that is still flowing or
+        // creeping moves faster than this on average.
         let since = sim.time - self.p.rest_time;
         let still = self.p.rest_speed * STILL_FRACTION;
-        if self.still_speeds.iter().any(|(t, _)| *t <= since)
+        if self.mean_speeds.iter().any(|(t, _)| *t <= since)
             && self
-                .still_speeds
+                .mean_speeds
                 .iter()
                 .filter(|(t, _)| *t >= since)
                 .all(|(_, v)| *v < still)
@@ -583,8 +564,8 @@ impl Protocol for ReposeProtocol {
         if sim.time + 1e-12 >= self.next_check {
             let h = observe::heap(sim, self.tray);
             self.angles.push((sim.time, h.cone_angle_deg));
-            if let Some(v) = self.still_speed_below_outlet(sim) {
-                self.still_speeds.push((sim.time, v));
+            if let Some(v) = self.mean_speed_below_outlet(sim) {
+                self.mean_speeds.push((sim.time, v));
             }
             self.next_check = sim.time + self.check_every;
             if self.at_rest(sim) {

@@ -288,8 +288,7 @@ fn a_funnel_stopped_before_rest_says_why() {
 /// The kept case of a heap whose angle flips for ever (docs/rockers/rocker.toml: one grain
 /// rocks on the apex, docs/li2022-compare.md "Grains that never stop"). Before the still
 /// path it ran to `max_time` (8 s) in the study; now it is at rest once the soil below the
-/// outlet (its fastest 1 % left out) has averaged under a fifth of `rest_speed` for
-/// `rest_time`.
+/// outlet has averaged under a fifth of `rest_speed` for `rest_time`.
 #[test]
 fn a_heap_whose_angle_flips_comes_to_rest_when_the_soil_is_still() {
     let e = rocker(None);
