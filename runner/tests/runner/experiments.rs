@@ -212,22 +212,33 @@ fn compare_puts_simulated_next_to_measured_with_errors_from_their_definition() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
-/// A funnel whose outlet arches over: the run stops with the jam named, instead of reporting
-/// the few grains that got through as a heap "at rest".
-#[test]
-fn a_jammed_funnel_is_an_error_not_a_heap() {
-    let dir = std::env::temp_dir().join(format!("tilth-jam-{}", std::process::id()));
+/// A coarse funnel test of models/li2022.toml at `moisture` % with one `[repose]` line,
+/// written to a fresh temporary directory: (the directory, the experiment file).
+fn li2022_funnel(
+    tag: &str,
+    moisture: f64,
+    repose: &str,
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("tilth-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml");
-    let file = dir.join("jam.toml");
+    let file = dir.join(format!("{tag}.toml"));
     std::fs::write(
         &file,
         format!(
-            "format_version = 1\nexperiment = \"repose\"\nmodel = {:?}\ncoarse = true\n[conditions]\nmoisture_pct = 12\n[repose]\nfunnel_outlet_diameter = 0.0125\n",
+            "format_version = 1\nexperiment = \"repose\"\nmodel = {:?}\ncoarse = true\n[conditions]\nmoisture_pct = {moisture}\n[repose]\n{repose}\n",
             model.display().to_string()
         ),
     )
     .unwrap();
+    (dir, file)
+}
+
+/// A funnel whose outlet arches over: the run stops with the jam named, instead of reporting
+/// the few grains that got through as a heap "at rest".
+#[test]
+fn a_jammed_funnel_is_an_error_not_a_heap() {
+    let (dir, file) = li2022_funnel("jam", 12.0, "funnel_outlet_diameter = 0.0125");
     let out = tilth()
         .arg("run")
         .arg(&file)
@@ -249,18 +260,7 @@ fn a_jammed_funnel_is_an_error_not_a_heap() {
 /// the soil below the outlet moves on average and more time is the answer.
 #[test]
 fn a_funnel_stopped_before_rest_says_why() {
-    let dir = std::env::temp_dir().join(format!("tilth-early-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml");
-    let file = dir.join("early.toml");
-    std::fs::write(
-        &file,
-        format!(
-            "format_version = 1\nexperiment = \"repose\"\nmodel = {:?}\ncoarse = true\n[conditions]\nmoisture_pct = 6\n[repose]\nmax_time = 0.15\n",
-            model.display().to_string()
-        ),
-    )
-    .unwrap();
+    let (dir, file) = li2022_funnel("early", 6.0, "max_time = 0.15");
     let out = tilth()
         .args(["run", "--quiet", "--json", "--out"])
         .arg(dir.join("out"))
