@@ -261,19 +261,7 @@ fn a_jammed_funnel_is_an_error_not_a_heap() {
 #[test]
 fn a_funnel_stopped_before_rest_says_why() {
     let (dir, file) = li2022_funnel("early", 6.0, "max_time = 0.15");
-    let out = tilth()
-        .args(["run", "--quiet", "--json", "--out"])
-        .arg(dir.join("out"))
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let e = &summary["experiment"];
+    let e = &experiment_summary(&file, &dir.join("out"));
     assert_eq!(e["settled"], false, "{e}");
     let warning = e["warning"].as_str().unwrap();
     assert!(
@@ -332,19 +320,21 @@ fn rocker(max_time: Option<f64>) -> serde_json::Value {
     };
     let file = dir.join("rocker.toml");
     std::fs::write(&file, text).unwrap();
-    let out = tilth()
+    let e = experiment_summary(&file, &dir.join("out"));
+    let _ = std::fs::remove_dir_all(&dir);
+    e
+}
+
+/// `tilth run --json FILE --out OUT`, which must succeed: the experiment's part of its summary.
+fn experiment_summary(file: &Path, out: &Path) -> serde_json::Value {
+    let r = tilth()
         .args(["run", "--quiet", "--json", "--out"])
-        .arg(dir.join("out"))
-        .arg(&file)
+        .arg(out)
+        .arg(file)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
     summary["experiment"].clone()
 }
 
