@@ -1,0 +1,157 @@
+#!/usr/bin/env python3
+"""How often a perfect model meets the issue's criterion: the odds that the truth itself, compared
+with its own synthetic data, has every reading's RMSE within 1.5x the injected noise.
+
+    python3 tools/discovery/criterion_odds.py STUDY [STUDY ...] [--noise SPEC] [--draws N]
+    python3 tools/discovery/criterion_odds.py --levels
+
+STUDY is a hidden-effect study's OUT run with TRUTH=1 (tools/discovery/hidden_effect.sh): its
+`data.csv` and its truth's compare `5-truth/compare.json`. NOISE is the injected noise the data
+were made with (default: tools/discovery/setup.sh's, as tables.py).
+
+Why. A measured value is the mean of R_d truth runs plus injected noise e (sd sigma); the truth's
+compare is the mean of R_j other runs. For the truth, the residual of row i is therefore normal
+with mean 0 and variance
+
+    v_i = sigma_i^2 + s_i^2 / R_d + s_i^2 / R_j,
+
+s_i the scatter of one run at that condition (the compare's `simulated_scatter`). Over a
+reading's n conditions, RMSE^2 = sum r_i^2 / n. The criterion asks RMSE <= 1.5 x the RMS of
+sigma_i. Even with infinitely many runs (v_i = sigma_i^2, all equal) that is
+chi^2_n <= 2.25 n, which fails with a probability set by n alone: 6.1 % at 4 conditions,
+2.7 % at 7. With four readings for each of three hidden effects, twelve chances. `--levels`
+prints that bound against n; a STUDY gets the odds of its own design by Monte Carlo over the
+v_i above, each reading independent of the others (their noise is; their run scatter is not
+quite, since a steeper heap also holds more soil).
+
+A fitted model's residuals are a little smaller than the truth's (its P free parameters absorb
+P of the 4n dimensions of the noise), so its odds are a little better than these; they are the
+odds of a fit that has found the truth.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import random
+import re
+import sys
+
+READINGS = ["heap_cone_angle_deg", "tray_mass_g", "funnel_flow_rate_g_s", "funnel_residue_g"]
+BAR = 1.5
+
+
+def default_noise():
+    setup = open(os.path.join(os.path.dirname(__file__), "setup.sh")).read()
+    return re.search(r"NOISE=\$\{NOISE:-([^}]*)\}", setup).group(1)
+
+
+def parse_noise(spec):
+    return dict(kv.split("=") for kv in spec.split(","))
+
+
+def injected(spec, observable, value):
+    """The injected noise's sd for one row: absolute, or a percentage of the measured value."""
+    s = spec[observable]
+    return float(s[:-1]) / 100 * abs(value) if s.endswith("%") else float(s)
+
+
+def chi2_survival(x, k):
+    """P(chi^2_k > x) for an integer k, in closed form (Abramowitz and Stegun 26.4.4-26.4.5)."""
+    if x <= 0:
+        return 1.0
+    h = x / 2
+    if k % 2 == 0:
+        term, total = 1.0, 1.0
+        for i in range(1, k // 2):
+            term *= h / i
+            total += term
+        return math.exp(-h) * total
+    total = math.erfc(math.sqrt(h))
+    term = math.sqrt(h) / math.gamma(1.5)  # h^(1/2) / Gamma(3/2)
+    for i in range(1, (k + 1) // 2):
+        total += math.exp(-h) * term
+        term *= h / (i + 0.5)
+    return total
+
+
+def perfect_pass(n):
+    """The chance that one reading of a perfect model, with infinitely many runs, meets the bar
+    at n conditions: P(chi^2_n <= BAR^2 n)."""
+    return 1.0 - chi2_survival(BAR * BAR * n, n)
+
+
+def reading_variances(study, spec):
+    """Per reading: the injected sds and the truth's residual variances v_i, row by row."""
+    with open(os.path.join(study, "data.csv")) as f:
+        data = list(csv.DictReader(f))
+    truth = json.load(open(os.path.join(study, "5-truth", "compare.json")))
+    r_judge = truth["replicates"]
+    scatter = {(r["observable"], json.dumps(r["conditions"], sort_keys=True)): r["simulated_scatter"]
+               for r in truth["rows"]}
+    out = {}
+    for row in data:
+        obs = row["observable"]
+        cond = {"moisture_pct": float(row["moisture_pct"])}
+        s = scatter[(obs, json.dumps(cond, sort_keys=True))]
+        sigma = injected(spec, obs, float(row["value"]))
+        v = sigma ** 2 + s ** 2 / float(row["replicates"]) + s ** 2 / r_judge
+        out.setdefault(obs, []).append((sigma, v))
+    return out
+
+
+def pass_odds(rows, draws, rng):
+    """Monte Carlo: the share of draws of the residuals r_i ~ N(0, v_i) whose RMSE is within
+    BAR x the RMS injected noise."""
+    n = len(rows)
+    bar2 = BAR * BAR * sum(sigma * sigma for sigma, _ in rows) / n
+    sds = [math.sqrt(v) for _, v in rows]
+    ok = 0
+    for _ in range(draws):
+        if sum(rng.gauss(0.0, sd) ** 2 for sd in sds) / n <= bar2:
+            ok += 1
+    return ok / draws
+
+
+def study_table(studies, spec, draws, seed):
+    rng = random.Random(seed)
+    print("| study | " + " | ".join(READINGS) + " | all four |")
+    print("|---" * (len(READINGS) + 2) + "|")
+    every = 1.0
+    for study in studies:
+        per = reading_variances(study, spec)
+        odds = [pass_odds(per[o], draws, rng) if o in per else float("nan") for o in READINGS]
+        both = math.prod(p for p in odds if not math.isnan(p))
+        every *= both
+        n = len(next(iter(per.values())))
+        print(f"| {os.path.basename(os.path.normpath(study))} ({n} levels) | "
+              + " | ".join(f"{p:.3f}" for p in odds) + f" | {both:.3f} |")
+    print(f"\nall studies together: {every:.3f} (readings taken as independent)")
+
+
+def levels_table():
+    print("| conditions n | one reading | twelve readings |")
+    print("|---|---|---|")
+    for n in [4, 7, 10, 12, 16, 20, 28]:
+        p = perfect_pass(n)
+        print(f"| {n} | {p:.4f} | {p ** 12:.3f} |")
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("studies", nargs="*")
+    ap.add_argument("--noise", default=None)
+    ap.add_argument("--draws", type=int, default=20000)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--levels", action="store_true")
+    a = ap.parse_args(argv)
+    if a.levels:
+        levels_table()
+    if a.studies:
+        study_table(a.studies, parse_noise(a.noise or default_noise()), a.draws, a.seed)
+    if not a.levels and not a.studies:
+        ap.error("give a STUDY or --levels")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
