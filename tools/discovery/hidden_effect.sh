@@ -14,7 +14,8 @@
 # mean) and against the injected noise alone.
 #
 # Environment: TILTH (the binary; default target/release/tilth), MODEL (default
-# models/li2022.toml), SCALE (default --coarse; empty: the study's scale), R, R_DATA and
+# models/li2022.toml), SCALE (default --coarse; empty: the study's scale), LAB (more options
+# for every command: "--slurm" runs each batch of runs as a Slurm job array), R, R_DATA and
 # R_JUDGE (replicates), NOISE (the injected noise) and LEVELS (the moisture levels) as
 # setup.sh says, FREE (the model's free parameter), TRUTH=1 (also compare the truth itself
 # with the data, R_JUDGE runs per condition, in OUT/5-truth: the error a perfect fit would
@@ -26,11 +27,11 @@ effect=$1 strength=$2 out=$3 seed=${4:-1}
 source "$(dirname "$0")/setup.sh"
 
 "$tilth" synth --truth "$model" --with "$effect=$strength" --conditions "$out/conditions.csv" \
-  --noise "$NOISE" --replicates "$R_DATA" --seed "$seed" --out "$out/data.csv" $SCALE --quiet --cache "$cache"
+  --noise "$NOISE" --replicates "$R_DATA" --seed "$seed" --out "$out/data.csv" $SCALE $LAB --quiet --cache "$cache"
 "$tilth" compare --model "$model" --data "$out/data.csv" --out "$out/1-compare" \
-  --replicates "$R_JUDGE" $SCALE --quiet --cache "$cache" > /dev/null
+  --replicates "$R_JUDGE" $SCALE $LAB --quiet --cache "$cache" > /dev/null
 "$tilth" diagnose --model "$model" --data "$out/data.csv" --out "$out/2-diagnose" \
-  --param "$FREE" --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
+  --param "$FREE" --replicates "$R" $SCALE $LAB --quiet --cache "$cache" > /dev/null
 # The first candidate's strength, free in [0, max(3 x its estimate, 2 x its step)] from the
 # estimate: what a user knows after the diagnosis (the hidden strength is not used).
 top=$(python3 - "$out/2-diagnose/diagnosis.json" "$model" <<'PY'
@@ -45,12 +46,12 @@ read -r name est hi significant <<< "$top"
 echo "diagnose: first $name (strength $est, significant: $significant); hidden: $effect"
 "$tilth" fit --model "$model" --data "$out/data.csv" --out "$out/3-fit" \
   --param "$FREE" --param "candidate.$name=0:$hi@$est" \
-  --replicates "$R" --iterations 3 $SCALE --quiet --cache "$cache" > /dev/null
+  --replicates "$R" --iterations 3 $SCALE $LAB --quiet --cache "$cache" > /dev/null
 "$tilth" compare --model "$out/3-fit/model.toml" --data "$out/data.csv" --out "$out/4-compare" \
-  --replicates "$R_JUDGE" $SCALE --quiet --cache "$cache" > /dev/null
+  --replicates "$R_JUDGE" $SCALE $LAB --quiet --cache "$cache" > /dev/null
 if [ "${TRUTH:-0}" = 1 ]; then
   "$tilth" compare --model "$out/data.truth.toml" --data "$out/data.csv" --out "$out/5-truth" \
-    --replicates "$R_JUDGE" $SCALE --quiet --cache "$cache" > /dev/null
+    --replicates "$R_JUDGE" $SCALE $LAB --quiet --cache "$cache" > /dev/null
 fi
 "$tilth" report "$out" > /dev/null
 python3 "$(dirname "$0")/tables.py" --one "$out" "$NOISE"

@@ -7,16 +7,16 @@
 #   tools/discovery/null_study.sh OUT [SEEDS]
 #   tools/discovery/null_study.sh runs/null 20
 #
-# Environment: TILTH, MODEL, SCALE, R, NOISE, FREE as in hidden_effect.sh; CACHE (default
+# Environment: TILTH, MODEL, SCALE, LAB, R, NOISE, FREE as in hidden_effect.sh; CACHE (default
 # OUT/cache).
 set -euo pipefail
 out=$1 seeds=${2:-20}
 source "$(dirname "$0")/setup.sh"
 for s in $(seq 1 "$seeds"); do
   "$tilth" synth --truth "$model" --conditions "$out/conditions.csv" --noise "$NOISE" \
-    --replicates "$R" --seed "$s" --out "$out/seed-$s/data.csv" $SCALE --quiet --cache "$cache"
+    --replicates "$R" --seed "$s" --out "$out/seed-$s/data.csv" $SCALE $LAB --quiet --cache "$cache"
   "$tilth" diagnose --model "$model" --data "$out/seed-$s/data.csv" --out "$out/seed-$s/diagnose" \
-    --param "$FREE" --replicates "$R" $SCALE --quiet --cache "$cache" > /dev/null
+    --param "$FREE" --replicates "$R" $SCALE $LAB --quiet --cache "$cache" > /dev/null
 done
 python3 - "$out" "$seeds" <<'PY'
 import json, sys

@@ -13,6 +13,9 @@ NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%,f
 FREE=${FREE:-soil-soil.rolling_friction=0.05:0.45}
 model=${MODEL:-models/li2022.toml}
 SCALE=${SCALE---coarse}   # SCALE= (empty) runs at the study's scale
+# More options for every tilth command that runs the lab tests: LAB="--slurm --slurm-time 4:00:00"
+# makes each batch of runs a Slurm job array (the out and cache directories on shared storage).
+LAB=${LAB:-}
 cache=${CACHE:-$out/cache}
 # The moisture levels (%, space-separated). More levels make each reading's RMSE a steadier
 # number: over n rows a model that is the truth itself exceeds 1.5x the noise with the chance

@@ -28,8 +28,8 @@
 
 use super::calibrate_report;
 use super::compare::{
-    Measurement, SetArgs, condition_factors, experiment_text, factor, mean_sd, read_measurements,
-    run_generated,
+    Dispatch, Measurement, SetArgs, condition_factors, experiment_text, factor, mean_sd,
+    read_measurements, run_generated,
 };
 use crate::lab::model::{At, Model, evaluate_at};
 use crate::sweep::execute;
@@ -735,7 +735,7 @@ pub fn run_and_read<'a>(
     stop: &Arc<AtomicBool>,
     observable: impl Fn(usize) -> Option<&'a str>,
 ) -> Result<Vec<Option<f64>>> {
-    run_generated(plan, dir, args.cores, args.quiet, stop)?;
+    run_generated(plan, dir, &Dispatch::Local(args.cores), args.quiet, stop)?;
     Ok(plan
         .runs
         .iter()

@@ -14,6 +14,7 @@ use crate::lab::model::Model;
 use crate::sweep::execute::{self, Options};
 use crate::sweep::job::{RunSummary, Status, read_summary, run_dir, write_atomic};
 use crate::sweep::plan::{Factor, Plan, PlannedRun, fnv1a};
+use crate::sweep::slurm_wait::{self, SlurmJob};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use serde::Serialize;
@@ -72,6 +73,41 @@ pub struct LabRunArgs {
     /// later run only the new seeds.
     #[arg(long)]
     pub cache: Option<PathBuf>,
+    /// Run the runs as Slurm job arrays (one per test and setting, `sbatch --wait`) instead
+    /// of on this machine: the same numbers, bit for bit. The output directory, the cache and
+    /// the model must be on storage the nodes share.
+    #[arg(long)]
+    pub slurm: bool,
+    /// With --slurm: array tasks per job (default: one per run left, at most 100).
+    #[arg(long, requires = "slurm", value_parser = clap::value_parser!(u64).range(1..))]
+    pub slurm_tasks: Option<u64>,
+    /// With --slurm: time limit per task, Slurm syntax (default 12:00:00).
+    #[arg(long, requires = "slurm")]
+    pub slurm_time: Option<String>,
+    /// With --slurm: the partition (default: the cluster's default).
+    #[arg(long, requires = "slurm")]
+    pub slurm_partition: Option<String>,
+}
+
+impl LabRunArgs {
+    /// How the runs are made: on this machine's cores, or as Slurm arrays.
+    pub fn dispatch(&self) -> Dispatch {
+        if !self.slurm {
+            return Dispatch::Local(self.cores);
+        }
+        Dispatch::Slurm(SlurmJob {
+            tasks: self.slurm_tasks.map(|t| t as usize),
+            time: self.slurm_time.clone().unwrap_or_else(|| "12:00:00".into()),
+            partition: self.slurm_partition.clone(),
+        })
+    }
+}
+
+/// Where a lab command's runs are made.
+pub enum Dispatch {
+    /// On this machine, with at most this many cores (default: all it may use).
+    Local(Option<usize>),
+    Slurm(SlurmJob),
 }
 
 /// One line of the comparison.
@@ -375,7 +411,7 @@ pub fn simulate(
     }
     let mut by_row: BTreeMap<usize, (Vec<f64>, Vec<String>)> = BTreeMap::new();
     for (test, plan, dir) in &plans {
-        run_generated(plan, dir, how.lab.cores, how.lab.quiet, stop)?;
+        run_generated(plan, dir, &how.lab.dispatch(), how.lab.quiet, stop)?;
         for (i, m) in rows.iter().enumerate().filter(|(_, m)| &m.test == test) {
             let (sims, problems) = by_row.entry(m.row).or_default();
             for run in plan.runs.iter().filter(|r| r.std == group[i]) {
@@ -454,10 +490,14 @@ fn cached_model(model: &Path, cache: &Path) -> Result<PathBuf> {
 pub fn run_generated(
     plan: &Plan,
     dir: &Path,
-    cores: Option<usize>,
+    dispatch: &Dispatch,
     quiet: bool,
     stop: &Arc<AtomicBool>,
 ) -> Result<()> {
+    let cores = match dispatch {
+        Dispatch::Local(cores) => *cores,
+        Dispatch::Slurm(job) => return slurm_wait::run(plan, dir, job, quiet),
+    };
     if !quiet {
         eprintln!(
             "{}: {} runs into {}",

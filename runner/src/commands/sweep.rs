@@ -1,9 +1,10 @@
-//! `tilth sweep plan|run|status|slurm`.
+//! `tilth sweep plan|run|status|slurm` (and `worker`, the array task of a lab command's
+//! `--slurm`).
 
 use crate::sweep::execute::{self, Options};
 use crate::sweep::job::Status;
 use crate::sweep::manifest::Manifest;
-use crate::sweep::{Plan, slurm};
+use crate::sweep::{Plan, slurm, slurm_wait};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Subcommand};
 use std::io::Write;
@@ -19,6 +20,19 @@ pub enum SweepCommand {
     Status(StatusArgs),
     /// Write an sbatch script that runs the sweep as a Slurm job array.
     Slurm(SlurmArgs),
+    /// One Slurm array task's share of the runs a lab command's `--slurm` wrote to
+    /// `DIR/plan.json` (the array's script calls it).
+    #[command(hide = true)]
+    Worker(WorkerArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct WorkerArgs {
+    /// The directory holding `plan.json`.
+    pub dir: PathBuf,
+    /// Cores to use (the array's script passes the task's).
+    #[arg(long)]
+    pub cores: Option<usize>,
 }
 
 #[derive(Debug, Args)]
@@ -160,6 +174,7 @@ pub fn sweep(cmd: &SweepCommand, out: &mut dyn Write) -> Result<()> {
         }
         SweepCommand::Run(args) => run(args, out),
         SweepCommand::Status(args) => status(args, out),
+        SweepCommand::Worker(args) => slurm_wait::work(&args.dir, args.cores, slurm_shard()?),
         SweepCommand::Slurm(args) => {
             let plan = Plan::load(Some(&args.file))?;
             let dir = args.out.clone().unwrap_or_else(|| default_out(&plan));

@@ -1,6 +1,6 @@
 //! Sweeps: a sweep file expanded into runs ([`plan`]), run on pinned cores with one MCAP
 //! file each ([`execute`]), resumable through a manifest ([`manifest`]), and sharded over
-//! Slurm job arrays ([`slurm`]).
+//! Slurm job arrays ([`slurm`]; the lab commands' runs: [`slurm_wait`]).
 
 pub mod design;
 pub mod execute;
@@ -10,6 +10,7 @@ pub mod manifest;
 pub mod observe;
 pub mod plan;
 pub mod slurm;
+pub mod slurm_wait;
 pub mod target;
 
 pub use plan::{Plan, PlannedRun};

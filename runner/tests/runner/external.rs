@@ -212,6 +212,82 @@ fn a_slurm_job_array_runs_the_sweep_and_status_merges_the_shards() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
+/// `compare --slurm` of two funnel conditions, 2 replicates each, as a job array of two
+/// tasks: the same simulated values, bit for bit, as the same compare on this machine, and
+/// the runs really made by the array's tasks (their shard manifests and logs).
+#[test]
+fn a_lab_command_runs_on_slurm_with_the_numbers_of_a_local_run() {
+    let Some(()) = slurm() else { return };
+    let base = std::env::temp_dir().join(format!("tilth-slurm-lab-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let data = base.join("data.csv");
+    std::fs::write(
+        &data,
+        "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source\n\
+         repose,6,,,heap_cone_angle_deg,38,deg,1,1,test\n\
+         repose,9,,,heap_cone_angle_deg,40,deg,1,1,test\n",
+    )
+    .unwrap();
+    let compare = |out: &Path, slurm: &[&str]| {
+        run_ok(
+            tilth()
+                .args([
+                    "compare",
+                    "--coarse",
+                    "--quiet",
+                    "--replicates",
+                    "2",
+                    "--model",
+                ])
+                .arg(repo("models/li2022.toml"))
+                .arg("--data")
+                .arg(&data)
+                .arg("--out")
+                .arg(out)
+                .args(slurm),
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap())
+                .unwrap();
+        json["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r["simulated"].clone())
+            .collect::<Vec<_>>()
+    };
+    let on_slurm = base.join("slurm");
+    let remote = compare(
+        &on_slurm,
+        &["--slurm", "--slurm-tasks", "2", "--slurm-time", "10:00"],
+    );
+    let local = compare(&base.join("local"), &[]);
+    assert_eq!(remote, local);
+    assert!(
+        remote.iter().all(|v| v.as_array().unwrap().len() == 2),
+        "{remote:?}"
+    );
+    for shard in ["manifest.shard-0-of-2.json", "manifest.shard-1-of-2.json"] {
+        assert!(
+            on_slurm.join("repose").join(shard).exists(),
+            "{shard} missing"
+        );
+    }
+    let logs = std::fs::read_dir(on_slurm.join("repose/slurm"))
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "out")
+        })
+        .count();
+    assert_eq!(logs, 2, "one log per array task");
+    let _ = std::fs::remove_dir_all(&base);
+}
+
 #[test]
 fn bonds_are_recorded_and_decode_with_foxglove_schemas() {
     let Some(py) = python() else { return };
