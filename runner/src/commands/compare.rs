@@ -76,7 +76,7 @@ pub struct LabRunArgs {
     /// Run the runs as Slurm job arrays (one per test and setting, `sbatch --wait`) instead
     /// of on this machine: the same numbers, bit for bit. The output directory, the cache and
     /// the model must be on storage the nodes share.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "cores")]
     pub slurm: bool,
     /// With --slurm: array tasks per job (default: one per run left, at most 100).
     #[arg(long, requires = "slurm", value_parser = clap::value_parser!(u64).range(1..))]
@@ -329,86 +329,14 @@ pub fn simulate(
     how: &Simulate,
     stop: &Arc<AtomicBool>,
 ) -> Result<Vec<(Vec<f64>, Vec<String>)>> {
-    let model = match how.lab.cache.as_deref() {
-        Some(cache) => cached_model(how.model, cache)?,
-        None => how.model.to_path_buf(),
-    };
-    let mut tests: Vec<&str> = vec![];
-    for m in rows {
-        if !tests.contains(&m.test.as_str()) {
-            tests.push(&m.test);
-        }
-    }
+    let tests = tests_of(rows);
     for unused in how.set.iter().filter(|s| !tests.contains(&s.test.as_str())) {
         eprintln!(
             "warning: --set {}.{}: no {} rows here, so it is not used (nor checked)",
             unused.test, unused.key, unused.test
         );
     }
-    // Rows of one test at the same conditions (a repose run's angle, tray mass and flow
-    // rate) share their runs: `group[i]` is row i's set of runs, numbered per test.
-    let mut group = vec![0usize; rows.len()];
-    let mut plans = vec![];
-    for test in &tests {
-        let factors = condition_factors(test);
-        let mut conditions: Vec<BTreeMap<String, f64>> = vec![];
-        let mut seen: Vec<&BTreeMap<String, f64>> = vec![];
-        for (i, m) in rows.iter().enumerate().filter(|(_, m)| m.test == *test) {
-            if let Some(g) = seen.iter().position(|c| **c == m.conditions) {
-                group[i] = g + 1;
-                continue;
-            }
-            seen.push(&m.conditions);
-            group[i] = seen.len();
-            let mut values = BTreeMap::new();
-            for f in &factors {
-                let v = m.conditions.get(&f.name).ok_or_else(|| {
-                    anyhow!(
-                        "{}: row {}: a {test} row needs `{}`",
-                        how.data.display(),
-                        m.row,
-                        f.name
-                    )
-                })?;
-                values.insert(f.name.clone(), *v);
-            }
-            conditions.push(values);
-        }
-        // Replicate-major: every condition's first seed, then every condition's second, ...
-        // so that asking for more replicates later appends runs and keeps the numbers (and
-        // the finished runs) of those already done.
-        let mut runs = vec![];
-        for r in 0..how.replicates {
-            for (k, values) in conditions.iter().enumerate() {
-                runs.push(PlannedRun {
-                    id: runs.len() + 1,
-                    std: k + 1,
-                    replicate: r + 1,
-                    coded: BTreeMap::new(),
-                    values: values.clone(),
-                    seed: condition_seed(how.first_seed + r as u64, values),
-                });
-            }
-        }
-        let text = experiment_text(test, &model, how.lab.coarse, how.set);
-        let mut plan = Plan::generated(test, text, Path::new("."), factors, runs)
-            .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
-        // The sweep's identity leaves out how many replicates it has (each run is still
-        // checked against its own seed and conditions when it is reused).
-        plan.fingerprint = fnv1a(&[
-            &plan.sweep_text,
-            &serde_json::to_string(&conditions)?,
-            &how.first_seed.to_string(),
-        ]);
-        let dir = match how.lab.cache.as_deref() {
-            Some(cache) => cache.join(format!(
-                "{test}-{}",
-                fnv1a(&[&plan.fingerprint, build_id()?])
-            )),
-            None => how.out.join(test),
-        };
-        plans.push((test.to_string(), plan, dir));
-    }
+    let (plans, group) = plan_tests(rows, how)?;
     let mut by_row: BTreeMap<usize, (Vec<f64>, Vec<String>)> = BTreeMap::new();
     for (test, plan, dir) in &plans {
         run_generated(plan, dir, &how.lab.dispatch(), how.lab.quiet, stop)?;
@@ -487,6 +415,113 @@ fn cached_model(model: &Path, cache: &Path) -> Result<PathBuf> {
     Ok(path)
 }
 
+/// The tests of `rows`, in their first row's order.
+fn tests_of(rows: &[Measurement]) -> Vec<&str> {
+    let mut tests: Vec<&str> = vec![];
+    for m in rows {
+        if !tests.contains(&m.test.as_str()) {
+            tests.push(&m.test);
+        }
+    }
+    tests
+}
+
+/// A test's runs for `rows`: the test, its generated plan and the directory it runs in.
+type TestPlan = (String, Plan, PathBuf);
+
+/// The runs `simulate` needs, one plan per test, and `group[i]`: row i's set of runs (its
+/// conditions' number within its test).
+fn plan_tests(rows: &[Measurement], how: &Simulate) -> Result<(Vec<TestPlan>, Vec<usize>)> {
+    let model = match how.lab.cache.as_deref() {
+        Some(cache) => cached_model(how.model, cache)?,
+        None => how.model.to_path_buf(),
+    };
+    let tests = tests_of(rows);
+    // Rows of one test at the same conditions (a repose run's angle, tray mass and flow
+    // rate) share their runs: `group[i]` is row i's set of runs, numbered per test.
+    let mut group = vec![0usize; rows.len()];
+    let mut plans = vec![];
+    for test in &tests {
+        let factors = condition_factors(test);
+        let mut conditions: Vec<BTreeMap<String, f64>> = vec![];
+        let mut seen: Vec<&BTreeMap<String, f64>> = vec![];
+        for (i, m) in rows.iter().enumerate().filter(|(_, m)| m.test == *test) {
+            if let Some(g) = seen.iter().position(|c| **c == m.conditions) {
+                group[i] = g + 1;
+                continue;
+            }
+            seen.push(&m.conditions);
+            group[i] = seen.len();
+            let mut values = BTreeMap::new();
+            for f in &factors {
+                let v = m.conditions.get(&f.name).ok_or_else(|| {
+                    anyhow!(
+                        "{}: row {}: a {test} row needs `{}`",
+                        how.data.display(),
+                        m.row,
+                        f.name
+                    )
+                })?;
+                values.insert(f.name.clone(), *v);
+            }
+            conditions.push(values);
+        }
+        // Replicate-major: every condition's first seed, then every condition's second, ...
+        // so that asking for more replicates later appends runs and keeps the numbers (and
+        // the finished runs) of those already done.
+        let mut runs = vec![];
+        for r in 0..how.replicates {
+            for (k, values) in conditions.iter().enumerate() {
+                runs.push(PlannedRun {
+                    id: runs.len() + 1,
+                    std: k + 1,
+                    replicate: r + 1,
+                    coded: BTreeMap::new(),
+                    values: values.clone(),
+                    seed: condition_seed(how.first_seed + r as u64, values),
+                });
+            }
+        }
+        let text = experiment_text(test, &model, how.lab.coarse, how.set);
+        let mut plan = Plan::generated(test, text, Path::new("."), factors, runs)
+            .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
+        // The sweep's identity leaves out how many replicates it has (each run is still
+        // checked against its own seed and conditions when it is reused).
+        plan.fingerprint = fnv1a(&[
+            &plan.sweep_text,
+            &serde_json::to_string(&conditions)?,
+            &how.first_seed.to_string(),
+        ]);
+        let dir = match how.lab.cache.as_deref() {
+            Some(cache) => cache.join(format!(
+                "{test}-{}",
+                fnv1a(&[&plan.fingerprint, build_id()?])
+            )),
+            None => how.out.join(test),
+        };
+        plans.push((test.to_string(), plan, dir));
+    }
+    Ok((plans, group))
+}
+
+/// Makes the runs of several settings of the model (`hows`) at once where that saves time:
+/// with `--slurm`, as one job array, where one array per setting would wait for each
+/// setting's slowest run in turn (`diagnose`'s variants, `fit`'s Jacobian). Without it,
+/// nothing: `simulate` runs each setting when it is asked for, on this machine's cores.
+pub fn prefetch(rows: &[Measurement], hows: &[Simulate]) -> Result<()> {
+    let Some(first) = hows.first() else {
+        return Ok(());
+    };
+    let Dispatch::Slurm(job) = first.lab.dispatch() else {
+        return Ok(());
+    };
+    let mut batch = vec![];
+    for how in hows {
+        batch.extend(plan_tests(rows, how)?.0.into_iter().map(|(_, p, d)| (p, d)));
+    }
+    slurm_wait::run(&batch, &job, first.lab.quiet)
+}
+
 pub fn run_generated(
     plan: &Plan,
     dir: &Path,
@@ -496,7 +531,9 @@ pub fn run_generated(
 ) -> Result<()> {
     let cores = match dispatch {
         Dispatch::Local(cores) => *cores,
-        Dispatch::Slurm(job) => return slurm_wait::run(plan, dir, job, quiet),
+        Dispatch::Slurm(job) => {
+            return slurm_wait::run(&[(plan.clone(), dir.to_path_buf())], job, quiet);
+        }
     };
     if !quiet {
         eprintln!(

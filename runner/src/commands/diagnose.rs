@@ -13,7 +13,7 @@
 //! `DIR/diagnosis.md`, the ranking in words.
 
 use super::calibrate::{Param, parse_param};
-use super::compare::{LabRunArgs, Simulate, mean_sd, simulate, std_error};
+use super::compare::{LabRunArgs, Simulate, mean_sd, prefetch, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use super::model_edit::{add_to, switch_on, values_of, variant};
 use crate::lab::model::Model;
@@ -183,32 +183,40 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     }
 
     let stop = execute::stop_on_signals()?;
+    let outs: Vec<std::path::PathBuf> = variants
+        .iter()
+        .map(|(name, _, _)| args.out.join("runs").join(name))
+        .collect();
+    // With --slurm every variant's runs go into one job array.
+    let hows: Vec<Simulate> = variants
+        .iter()
+        .zip(&outs)
+        .enumerate()
+        .map(|(k, ((_, path, _), out))| Simulate {
+            model: path,
+            data: &args.data,
+            out,
+            replicates: args.replicates,
+            first_seed: if k == 0 {
+                1
+            } else {
+                1 + args.replicates as u64
+            },
+            lab: &args.lab,
+            set: &set,
+        })
+        .collect();
+    prefetch(&rows, &hows)?;
     let mut means: Vec<Vec<Option<f64>>> = vec![];
     let mut values: Vec<Vec<Vec<f64>>> = vec![];
     // The first reason a row has no value in some variant.
     let mut problems: BTreeMap<usize, String> = BTreeMap::new();
     let mut base_scatter: Vec<Option<f64>> = vec![];
-    for (k, (name, path, _)) in variants.iter().enumerate() {
+    for (k, (name, _, _)) in variants.iter().enumerate() {
         if !args.lab.quiet {
             eprintln!("variant {} of {}: {name}", k + 1, variants.len());
         }
-        let sims = simulate(
-            &rows,
-            &Simulate {
-                model: path,
-                data: &args.data,
-                out: &args.out.join("runs").join(name),
-                replicates: args.replicates,
-                first_seed: if k == 0 {
-                    1
-                } else {
-                    1 + args.replicates as u64
-                },
-                lab: &args.lab,
-                set: &set,
-            },
-            &stop,
-        )?;
+        let sims = simulate(&rows, &hows[k], &stop)?;
         if k == 0 {
             base_scatter = sims.iter().map(|(v, _)| mean_sd(v).1).collect();
         }

@@ -20,7 +20,7 @@ pub enum SweepCommand {
     Status(StatusArgs),
     /// Write an sbatch script that runs the sweep as a Slurm job array.
     Slurm(SlurmArgs),
-    /// One Slurm array task's share of the runs a lab command's `--slurm` wrote to
+    /// One Slurm array task's share of the runs a lab command's `--slurm` wrote to each
     /// `DIR/plan.json` (the array's script calls it).
     #[command(hide = true)]
     Worker(WorkerArgs),
@@ -28,8 +28,9 @@ pub enum SweepCommand {
 
 #[derive(Debug, Args)]
 pub struct WorkerArgs {
-    /// The directory holding `plan.json`.
-    pub dir: PathBuf,
+    /// The directories holding each plan's `plan.json`.
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
     /// Cores to use (the array's script passes the task's).
     #[arg(long)]
     pub cores: Option<usize>,
@@ -174,7 +175,7 @@ pub fn sweep(cmd: &SweepCommand, out: &mut dyn Write) -> Result<()> {
         }
         SweepCommand::Run(args) => run(args, out),
         SweepCommand::Status(args) => status(args, out),
-        SweepCommand::Worker(args) => slurm_wait::work(&args.dir, args.cores, slurm_shard()?),
+        SweepCommand::Worker(args) => slurm_wait::work(&args.dirs, args.cores, slurm_shard()?),
         SweepCommand::Slurm(args) => {
             let plan = Plan::load(Some(&args.file))?;
             let dir = args.out.clone().unwrap_or_else(|| default_out(&plan));

@@ -2,10 +2,13 @@
 //! `synth`): what a user needs when a study outgrows one machine, such as the discovery proof
 //! at the study's scale.
 //!
-//! The command writes the runs it needs (a generated plan: one test, its conditions and
-//! seeds) to `DIR/plan.json`, submits an array whose tasks each run `tilth sweep worker DIR`
-//! (every N-th run, as `tilth sweep run` does in an array task), and waits for it
-//! (`sbatch --wait`). Then it reads the runs' summaries as after a local run, so the numbers
+//! The command writes the runs it needs (generated plans: one test, its conditions and seeds,
+//! at one setting of the model) to `DIR/plan.json` of each plan's directory, submits one
+//! array whose tasks each run `tilth sweep worker DIR...` (every N-th run of the plans
+//! taken together, as `tilth sweep run` does in an array task), and waits for it
+//! (`sbatch --wait`). Several settings go into one array where a command knows them
+//! together (`diagnose`'s variants, `fit`'s Jacobian), so that they do not wait for each
+//! other's slowest run. Then it reads the runs' summaries as after a local run, so the numbers
 //! are the same bits either way: each run depends on its model, conditions and seed only.
 //! Runs already done (an earlier job, a local run, the cache) are not submitted again.
 
@@ -113,8 +116,9 @@ fn write_plan(plan: &Plan, out: &Path) -> Result<()> {
     write_atomic(&out.join(PLAN_FILE), &serde_json::to_vec_pretty(&f)?)
 }
 
-/// The array's script: each task runs its share of `out/plan.json`.
-fn script(plan: &Plan, out: &Path, tasks: usize, job: &SlurmJob) -> Result<String> {
+/// The array's script: task i of N runs every N-th run of the plans in `dirs`, counted
+/// together.
+fn script(dirs: &[PathBuf], runs: usize, tasks: usize, job: &SlurmJob) -> Result<String> {
     let exe = std::env::current_exe().context("cannot find the tilth executable")?;
     let cwd = std::env::current_dir().context("cannot read the current directory")?;
     let partition = job
@@ -122,53 +126,77 @@ fn script(plan: &Plan, out: &Path, tasks: usize, job: &SlurmJob) -> Result<Strin
         .as_ref()
         .map(|p| format!("#SBATCH --partition={p}\n"))
         .unwrap_or_default();
+    let logs = dirs[0].join("slurm");
+    let list: Vec<String> = dirs
+        .iter()
+        .map(|d| format!("\"{}\"", d.display()))
+        .collect();
     Ok(format!(
         r#"#!/bin/bash
-# Written by tilth's --slurm for the runs of `{name}` in {out} ({runs} runs).
-#SBATCH --job-name=tilth-{name}
+# Written by tilth's --slurm: {runs} runs of {plans} plan(s), the first in {first}.
+#SBATCH --job-name=tilth-lab
 #SBATCH --array=0-{last}
-#SBATCH --cpus-per-task={threads}
+#SBATCH --cpus-per-task=1
 #SBATCH --time={time}
 #SBATCH --signal=TERM@60
 #SBATCH --chdir={cwd}
-#SBATCH --output={out}/slurm/%A_%a.out
+#SBATCH --output={logs}/%A_%a.out
 {partition}
 set -euo pipefail
-exec "{exe}" sweep worker "{out}" --cores "${{SLURM_CPUS_PER_TASK:-{threads}}}"
+exec "{exe}" sweep worker --cores "${{SLURM_CPUS_PER_TASK:-1}}" \
+  {list}
 "#,
-        name = plan.name,
-        runs = plan.runs.len(),
+        plans = dirs.len(),
+        first = dirs[0].display(),
         last = tasks - 1,
-        threads = plan.threads,
         time = job.time,
         cwd = cwd.display(),
-        out = out.display(),
+        logs = logs.display(),
         exe = exe.display(),
+        list = list.join(" \\\n  "),
     ))
 }
 
-/// Runs what is left of `plan` in `out` as a Slurm array and waits for it.
-pub fn run(plan: &Plan, out: &Path, job: &SlurmJob, quiet: bool) -> Result<()> {
-    let out = std::path::absolute(out)?;
-    super::manifest::claim(&out, plan)?;
-    let left = plan
-        .runs
+/// The runs of `plan` in `out` not done yet.
+fn left(plan: &Plan, out: &Path) -> usize {
+    plan.runs
         .iter()
-        .filter(|r| Row::observe(&out, r, &plan.fingerprint).status != Status::Done)
-        .count();
-    if left == 0 {
+        .filter(|r| Row::observe(out, r, &plan.fingerprint).status != Status::Done)
+        .count()
+}
+
+/// Runs what is left of each plan (in its directory) as one Slurm array and waits for it.
+/// Its script and the tasks' logs go to the first directory's `slurm/`.
+pub fn run(batch: &[(Plan, PathBuf)], job: &SlurmJob, quiet: bool) -> Result<()> {
+    let mut todo: Vec<(&Plan, PathBuf)> = vec![];
+    for (plan, dir) in batch {
+        let dir = std::path::absolute(dir)?;
+        super::manifest::claim(&dir, plan)?;
+        if left(plan, &dir) > 0 && !todo.iter().any(|(_, d)| *d == dir) {
+            todo.push((plan, dir));
+        }
+    }
+    if todo.is_empty() {
         return Ok(());
     }
-    let tasks = job.tasks.unwrap_or(left.min(100)).clamp(1, plan.runs.len());
-    write_plan(plan, &out)?;
-    let logs = out.join("slurm");
+    let runs: usize = todo.iter().map(|(p, _)| p.runs.len()).sum();
+    let remaining: usize = todo.iter().map(|(p, d)| left(p, d)).sum();
+    if todo.iter().any(|(p, _)| p.threads != 1) {
+        bail!("--slurm: a plan with more than one thread per run is not supported");
+    }
+    let tasks = job.tasks.unwrap_or(remaining.min(100)).clamp(1, runs);
+    for (plan, dir) in &todo {
+        write_plan(plan, dir)?;
+    }
+    let dirs: Vec<PathBuf> = todo.iter().map(|(_, d)| d.clone()).collect();
+    let logs = dirs[0].join("slurm");
     std::fs::create_dir_all(&logs).with_context(|| format!("{}: cannot create", logs.display()))?;
     let path = logs.join("job.sh");
-    write_atomic(&path, script(plan, &out, tasks, job)?.as_bytes())?;
+    write_atomic(&path, script(&dirs, runs, tasks, job)?.as_bytes())?;
     if !quiet {
         eprintln!(
-            "{}: {left} runs as a Slurm array of {tasks} tasks ({}), waiting for it",
-            plan.name,
+            "{remaining} runs of {} setting(s) as a Slurm array of {tasks} tasks ({}), waiting for it",
+            todo.len(),
             path.display()
         );
     }
@@ -179,18 +207,11 @@ pub fn run(plan: &Plan, out: &Path, job: &SlurmJob, quiet: bool) -> Result<()> {
         .map_err(|e| anyhow!("--slurm: cannot start sbatch ({e}); it must be on PATH"))?;
     if !done.status.success() {
         // A task that ran out of time or failed: what finished is kept, the command can be
-        // run again to go on. Say which runs are missing and where the task logs are.
-        let missing = plan
-            .runs
-            .iter()
-            .filter(|r| Row::observe(&out, r, &plan.fingerprint).status != Status::Done)
-            .count();
+        // run again to go on. Say how many runs are missing and where the task logs are.
+        let missing: usize = todo.iter().map(|(p, d)| left(p, d)).sum();
         bail!(
-            "{}: the Slurm job ended with {} ({} of {} runs not done); the tasks' logs are in {}; run the command again to resume\n{}",
-            plan.name,
+            "the Slurm job ended with {} ({missing} of {runs} runs not done); the tasks' logs are in {}; run the command again to resume\n{}",
             done.status,
-            missing,
-            plan.runs.len(),
             logs.display(),
             String::from_utf8_lossy(&done.stderr).trim()
         );
@@ -198,23 +219,63 @@ pub fn run(plan: &Plan, out: &Path, job: &SlurmJob, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-/// `tilth sweep worker DIR`: this array task's share of `DIR/plan.json`.
-pub fn work(out: &Path, cores: Option<usize>, shard: Option<(usize, usize)>) -> Result<()> {
-    let plan = read_plan(out)?;
-    let opts = Options {
-        out: out.to_path_buf(),
-        cores,
-        shard,
-        retry_failed: false,
-        show_progress: false,
-        // Slurm places the task; a task pinning itself to the node's first cores would share
-        // them with the other tasks on the node.
-        pin: false,
-    };
+/// Task (i, n)'s shard of a plan whose runs come after `offset` runs of the plans before it:
+/// run id k has place offset + k - 1 in the count, and is the task's when that is i mod n,
+/// that is when k - 1 is (i - offset) mod n.
+fn plan_shard((i, n): (usize, usize), offset: usize) -> (usize, usize) {
+    ((i + n - offset % n) % n, n)
+}
+
+/// `tilth sweep worker DIR...`: this array task's share of the plans in `dirs`. Their runs
+/// are counted together, the first plan's first, so that task i of N runs the runs whose
+/// place in that count is i modulo N: every task gets work when the plans are small.
+pub fn work(dirs: &[PathBuf], cores: Option<usize>, shard: Option<(usize, usize)>) -> Result<()> {
     let stop = execute::stop_on_signals()?;
-    let outcome = execute::execute(&plan, &opts, stop)?;
-    if outcome.interrupted {
-        return Err(crate::commands::sweep::SweepEnd::Interrupted.into());
+    let mut offset = 0;
+    for dir in dirs {
+        let plan = read_plan(dir)?;
+        let mine = shard.map(|s| plan_shard(s, offset));
+        offset += plan.runs.len();
+        let opts = Options {
+            out: dir.clone(),
+            cores,
+            shard: mine,
+            retry_failed: false,
+            show_progress: false,
+            // Slurm places the task; a task pinning itself to the node's first cores would
+            // share them with the other tasks on the node.
+            pin: false,
+        };
+        let outcome = execute::execute(&plan, &opts, stop.clone())?;
+        if outcome.interrupted {
+            return Err(crate::commands::sweep::SweepEnd::Interrupted.into());
+        }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::plan_shard;
+    use crate::sweep::execute::in_shard;
+
+    #[test]
+    fn every_run_of_several_plans_goes_to_one_task_and_the_tasks_share_them_evenly() {
+        let sizes = [3usize, 5, 2, 7];
+        let n = 4;
+        let mut load = vec![0usize; n];
+        let mut offset = 0;
+        for size in sizes {
+            for id in 1..=size {
+                let owners: Vec<usize> = (0..n)
+                    .filter(|&i| in_shard(id, Some(plan_shard((i, n), offset))))
+                    .collect();
+                assert_eq!(owners, [(offset + id - 1) % n], "run {id} after {offset}");
+                load[owners[0]] += 1;
+            }
+            offset += size;
+        }
+        // 17 runs over 4 tasks: 5, 4, 4, 4.
+        assert_eq!(load, [5, 4, 4, 4]);
+    }
 }

@@ -288,6 +288,54 @@ fn a_lab_command_runs_on_slurm_with_the_numbers_of_a_local_run() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
+/// `diagnose --slurm` puts all its variants (the model, its second seeds, the free
+/// parameter moved, each candidate on) into one job array, and finds what it finds on this
+/// machine: the same candidates with the same statistics, bit for bit.
+#[test]
+fn diagnose_on_slurm_runs_its_variants_as_one_array_with_the_local_numbers() {
+    let Some(()) = slurm() else { return };
+    let base = std::env::temp_dir().join(format!("tilth-slurm-diag-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let data = base.join("data.csv");
+    std::fs::write(
+        &data,
+        "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source\n\
+         repose,9,,,heap_cone_angle_deg,40,deg,1,1,test\n\
+         repose,9,,,tray_mass_g,14,g,0.5,1,test\n",
+    )
+    .unwrap();
+    let diagnose = |out: &Path, slurm: &[&str]| {
+        run_ok(
+            tilth()
+                .args(["diagnose", "--coarse", "--quiet", "--replicates", "2"])
+                .args(["--param", "soil-soil.rolling_friction=0.05:0.45", "--model"])
+                .arg(repo("models/li2022.toml"))
+                .arg("--data")
+                .arg(&data)
+                .arg("--out")
+                .arg(out)
+                .args(slurm),
+        );
+        let text = std::fs::read_to_string(out.join("diagnosis.json")).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        json["candidates"].clone()
+    };
+    let on_slurm = base.join("slurm");
+    let remote = diagnose(&on_slurm, &["--slurm", "--slurm-time", "10:00"]);
+    let local = diagnose(&base.join("local"), &[]);
+    assert_eq!(remote, local);
+    // The model, its finite-difference seeds, the parameter moved and each candidate: all
+    // in the array of the first variant's directory.
+    let variants = 3 + remote.as_array().unwrap().len();
+    let script = std::fs::read_to_string(on_slurm.join("runs/base/repose/slurm/job.sh")).unwrap();
+    assert!(
+        script.contains(&format!("runs of {variants} plan(s)")),
+        "{script}"
+    );
+    let _ = std::fs::remove_dir_all(&base);
+}
+
 #[test]
 fn bonds_are_recorded_and_decode_with_foxglove_schemas() {
     let Some(py) = python() else { return };

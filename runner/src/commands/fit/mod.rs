@@ -32,7 +32,7 @@
 
 mod stop;
 
-use super::compare::{LabRunArgs, Simulate, mean_sd, simulate, std_error};
+use super::compare::{LabRunArgs, Simulate, TestSetting, mean_sd, prefetch, simulate, std_error};
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use super::model_edit::{add_to, switch_on, values_of, variant};
 use crate::lab::model::Model;
@@ -195,6 +195,24 @@ pub struct Step {
 /// The simulated row means (None where a run failed) and scatters at one setting.
 type Sims = (Vec<Option<f64>>, Vec<Option<f64>>);
 
+/// The runs of every row with the model file `model`, in `out`: replicates 1..R.
+fn at<'a>(
+    model: &'a std::path::Path,
+    out: &'a std::path::Path,
+    args: &'a FitArgs,
+    set: &'a [TestSetting],
+) -> Simulate<'a> {
+    Simulate {
+        model,
+        data: &args.data,
+        out,
+        replicates: args.replicates,
+        first_seed: 1,
+        lab: &args.lab,
+        set,
+    }
+}
+
 pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     if args.replicates < 2 {
@@ -225,25 +243,18 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     let models = args.out.join("models");
     std::fs::create_dir_all(&models)?;
 
-    // Simulates every row at `theta`, as variant `name` of iteration `it`.
-    let run = |it: usize, name: &str, theta: &[f64]| -> Result<Sims> {
+    // The model file and the run directory of variant `name` of iteration `it` (at `theta`).
+    let setting = |it: usize, name: &str, theta: &[f64]| -> Result<(PathBuf, PathBuf)> {
         let label = format!("iter-{it}-{name}");
         let path = variant(&model, &text, &models, &label, |d| {
             apply(d, &model, &params, theta)
         })?;
-        let sims = simulate(
-            &rows,
-            &Simulate {
-                model: &path,
-                data: &args.data,
-                out: &runs.join(format!("iter-{it}")).join(name),
-                replicates: args.replicates,
-                first_seed: 1,
-                lab: &args.lab,
-                set: &set,
-            },
-            &stop,
-        )?;
+        Ok((path, runs.join(format!("iter-{it}")).join(name)))
+    };
+    // Simulates every row at `theta`, as variant `name` of iteration `it`.
+    let run = |it: usize, name: &str, theta: &[f64]| -> Result<Sims> {
+        let (path, out) = setting(it, name, theta)?;
+        let sims = simulate(&rows, &at(&path, &out, args, &set), &stop)?;
         Ok(sims
             .iter()
             .map(|(v, _)| {
@@ -326,12 +337,26 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 break;
             }
             // The Jacobian at the new best setting, standardised by its standard errors.
-            let mut jac = DMatrix::zeros(rows.len(), n);
-            for (j, p) in params.iter().enumerate() {
+            let step = |j: usize| {
+                let p = &params[j];
                 let h0 = 0.05 * (p.high - p.low);
                 let h = if theta[j] + h0 <= p.high { h0 } else { -h0 };
                 let mut t = theta.clone();
                 t[j] += h;
+                (h, t)
+            };
+            // With --slurm the P moved settings go into one job array.
+            let moved_settings = (0..n)
+                .map(|j| setting(it, &format!("param-{j}"), &step(j).1))
+                .collect::<Result<Vec<_>>>()?;
+            let hows: Vec<Simulate> = moved_settings
+                .iter()
+                .map(|(path, out)| at(path, out, args, &set))
+                .collect();
+            prefetch(&rows, &hows)?;
+            let mut jac = DMatrix::zeros(rows.len(), n);
+            for (j, p) in params.iter().enumerate() {
+                let (h, t) = step(j);
                 let (moved, _) = run(it, &format!("param-{j}"), &t)?;
                 for i in 0..rows.len() {
                     let m = moved[i].ok_or_else(|| {
