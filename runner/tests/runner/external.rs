@@ -212,44 +212,60 @@ fn a_slurm_job_array_runs_the_sweep_and_status_merges_the_shards() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
+/// A fresh temporary directory for test `name`, holding `data.csv` with these funnel rows
+/// under the measurement header.
+fn funnel_data(name: &str, rows: &str) -> (PathBuf, PathBuf) {
+    let base = std::env::temp_dir().join(format!("tilth-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let data = base.join("data.csv");
+    let header = "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source\n";
+    std::fs::write(&data, format!("{header}{rows}")).unwrap();
+    (base, data)
+}
+
+/// Runs lab command `args` (coarse, quiet, `models/li2022.toml`) on `data` into `out`, with
+/// `extra` options, and returns its JSON output `file`.
+fn lab_json(
+    args: &[&str],
+    data: &Path,
+    out: &Path,
+    extra: &[&str],
+    file: &str,
+) -> serde_json::Value {
+    run_ok(
+        tilth()
+            .args(args)
+            .args(["--coarse", "--quiet", "--model"])
+            .arg(repo("models/li2022.toml"))
+            .arg("--data")
+            .arg(data)
+            .arg("--out")
+            .arg(out)
+            .args(extra),
+    );
+    serde_json::from_str(&std::fs::read_to_string(out.join(file)).unwrap()).unwrap()
+}
+
 /// `compare --slurm` of two funnel conditions, 2 replicates each, as a job array of two
 /// tasks: the same simulated values, bit for bit, as the same compare on this machine, and
 /// the runs really made by the array's tasks (their shard manifests and logs).
 #[test]
 fn a_lab_command_runs_on_slurm_with_the_numbers_of_a_local_run() {
     let Some(()) = slurm() else { return };
-    let base = std::env::temp_dir().join(format!("tilth-slurm-lab-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&base);
-    std::fs::create_dir_all(&base).unwrap();
-    let data = base.join("data.csv");
-    std::fs::write(
-        &data,
-        "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source\n\
-         repose,6,,,heap_cone_angle_deg,38,deg,1,1,test\n\
+    let (base, data) = funnel_data(
+        "slurm-lab",
+        "repose,6,,,heap_cone_angle_deg,38,deg,1,1,test\n\
          repose,9,,,heap_cone_angle_deg,40,deg,1,1,test\n",
-    )
-    .unwrap();
+    );
     let compare = |out: &Path, slurm: &[&str]| {
-        run_ok(
-            tilth()
-                .args([
-                    "compare",
-                    "--coarse",
-                    "--quiet",
-                    "--replicates",
-                    "2",
-                    "--model",
-                ])
-                .arg(repo("models/li2022.toml"))
-                .arg("--data")
-                .arg(&data)
-                .arg("--out")
-                .arg(out)
-                .args(slurm),
+        let json = lab_json(
+            &["compare", "--replicates", "2"],
+            &data,
+            out,
+            slurm,
+            "compare.json",
         );
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap())
-                .unwrap();
         json["rows"]
             .as_array()
             .unwrap()
@@ -294,32 +310,20 @@ fn a_lab_command_runs_on_slurm_with_the_numbers_of_a_local_run() {
 #[test]
 fn diagnose_on_slurm_runs_its_variants_as_one_array_with_the_local_numbers() {
     let Some(()) = slurm() else { return };
-    let base = std::env::temp_dir().join(format!("tilth-slurm-diag-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&base);
-    std::fs::create_dir_all(&base).unwrap();
-    let data = base.join("data.csv");
-    std::fs::write(
-        &data,
-        "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source\n\
-         repose,9,,,heap_cone_angle_deg,40,deg,1,1,test\n\
+    let (base, data) = funnel_data(
+        "slurm-diag",
+        "repose,9,,,heap_cone_angle_deg,40,deg,1,1,test\n\
          repose,9,,,tray_mass_g,14,g,0.5,1,test\n",
-    )
-    .unwrap();
+    );
     let diagnose = |out: &Path, slurm: &[&str]| {
-        run_ok(
-            tilth()
-                .args(["diagnose", "--coarse", "--quiet", "--replicates", "2"])
-                .args(["--param", "soil-soil.rolling_friction=0.05:0.45", "--model"])
-                .arg(repo("models/li2022.toml"))
-                .arg("--data")
-                .arg(&data)
-                .arg("--out")
-                .arg(out)
-                .args(slurm),
-        );
-        let text = std::fs::read_to_string(out.join("diagnosis.json")).unwrap();
-        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
-        json["candidates"].clone()
+        let args = [
+            "diagnose",
+            "--replicates",
+            "2",
+            "--param",
+            "soil-soil.rolling_friction=0.05:0.45",
+        ];
+        lab_json(&args, &data, out, slurm, "diagnosis.json")["candidates"].clone()
     };
     let on_slurm = base.join("slurm");
     let remote = diagnose(&on_slurm, &["--slurm", "--slurm-time", "10:00"]);
