@@ -17,9 +17,12 @@ use super::job::{Status, write_atomic};
 use super::manifest::Row;
 use super::plan::{Factor, Plan, PlannedRun};
 use anyhow::{Context, Result, anyhow, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::{Deserialize, Serialize};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::Duration;
 
 /// How the array is submitted.
 #[derive(Debug, Clone)]
@@ -200,11 +203,14 @@ pub fn run(batch: &[(Plan, PathBuf)], job: &SlurmJob, quiet: bool) -> Result<()>
             path.display()
         );
     }
-    let done = Command::new("sbatch")
+    let child = Command::new("sbatch")
         .arg("--wait")
         .arg(&path)
-        .output()
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
         .map_err(|e| anyhow!("--slurm: cannot start sbatch ({e}); it must be on PATH"))?;
+    let done = wait_showing_progress(child, &todo, remaining, quiet)?;
     if !done.status.success() {
         // A task that ran out of time or failed: what finished is kept, the command can be
         // run again to go on. Say how many runs are missing and where the task logs are.
@@ -217,6 +223,40 @@ pub fn run(batch: &[(Plan, PathBuf)], job: &SlurmJob, quiet: bool) -> Result<()>
         );
     }
     Ok(())
+}
+
+/// Waits for `sbatch --wait`, with a bar of the runs done (their summaries, polled) when
+/// stderr is a terminal: an array's tasks report to Slurm's logs, not to this terminal.
+fn wait_showing_progress(
+    mut child: Child,
+    todo: &[(&Plan, PathBuf)],
+    remaining: usize,
+    quiet: bool,
+) -> Result<Output> {
+    let bar = if !quiet && std::io::stderr().is_terminal() {
+        let bar =
+            ProgressBar::with_draw_target(Some(remaining as u64), ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template(
+                "slurm {bar:25} {pos}/{len} runs done, {elapsed} elapsed, ETA {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let before: usize = todo.iter().map(|(p, d)| p.runs.len() - left(p, d)).sum();
+    while child.try_wait()?.is_none() {
+        if !bar.is_hidden() {
+            let now: usize = todo.iter().map(|(p, d)| p.runs.len() - left(p, d)).sum();
+            bar.set_position(now.saturating_sub(before) as u64);
+        }
+        std::thread::sleep(Duration::from_secs(2));
+    }
+    bar.finish_and_clear();
+    Ok(child.wait_with_output()?)
 }
 
 /// Task (i, n)'s shard of a plan whose runs come after `offset` runs of the plans before it:
