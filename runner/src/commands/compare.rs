@@ -73,9 +73,10 @@ pub struct LabRunArgs {
     /// later run only the new seeds.
     #[arg(long)]
     pub cache: Option<PathBuf>,
-    /// Run the runs as Slurm job arrays (one per test and setting, `sbatch --wait`) instead
-    /// of on this machine: the same numbers, bit for bit. The output directory, the cache and
-    /// the model must be on storage the nodes share.
+    /// Run the runs as Slurm job arrays (`sbatch --wait`; one per setting of the model, or
+    /// one for all of diagnose's variants and of each fit Jacobian) instead of on this
+    /// machine: the same numbers, bit for bit. The output directory, the cache and the model
+    /// must be on storage the nodes share.
     #[arg(long, conflicts_with = "cores")]
     pub slurm: bool,
     /// With --slurm: array tasks per job (default: one per run left, at most 100).
