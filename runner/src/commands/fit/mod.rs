@@ -43,7 +43,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use stop::{Stop, at_noise, noise_gain, predicted_gain};
 
 #[derive(Debug, Args)]
@@ -197,8 +197,8 @@ type Sims = (Vec<Option<f64>>, Vec<Option<f64>>);
 
 /// The runs of every row with the model file `model`, in `out`: replicates 1..R.
 fn at<'a>(
-    model: &'a std::path::Path,
-    out: &'a std::path::Path,
+    model: &'a Path,
+    out: &'a Path,
     args: &'a FitArgs,
     set: &'a [TestSetting],
 ) -> Simulate<'a> {
@@ -251,10 +251,9 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         })?;
         Ok((path, runs.join(format!("iter-{it}")).join(name)))
     };
-    // Simulates every row at `theta`, as variant `name` of iteration `it`.
-    let run = |it: usize, name: &str, theta: &[f64]| -> Result<Sims> {
-        let (path, out) = setting(it, name, theta)?;
-        let sims = simulate(&rows, &at(&path, &out, args, &set), &stop)?;
+    // Simulates every row with the model file `path`, into `out`.
+    let run_at = |path: &Path, out: &Path| -> Result<Sims> {
+        let sims = simulate(&rows, &at(path, out, args, &set), &stop)?;
         Ok(sims
             .iter()
             .map(|(v, _)| {
@@ -266,6 +265,11 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 }
             })
             .unzip())
+    };
+    // Simulates every row at `theta`, as variant `name` of iteration `it`.
+    let run = |it: usize, name: &str, theta: &[f64]| -> Result<Sims> {
+        let (path, out) = setting(it, name, theta)?;
+        run_at(&path, &out)
     };
     let mut theta: Vec<f64> = params.iter().map(|p| p.start).collect();
     let mut best: Option<(Vec<f64>, f64, Vec<f64>, Vec<f64>, DMatrix<f64>)> = None;
@@ -337,18 +341,25 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 break;
             }
             // The Jacobian at the new best setting, standardised by its standard errors.
-            let step = |j: usize| {
-                let p = &params[j];
-                let h0 = 0.05 * (p.high - p.low);
-                let h = if theta[j] + h0 <= p.high { h0 } else { -h0 };
-                let mut t = theta.clone();
-                t[j] += h;
-                (h, t)
-            };
-            // With --slurm the P moved settings go into one job array.
-            let moved_settings = (0..n)
-                .map(|j| setting(it, &format!("param-{j}"), &step(j).1))
+            // Each parameter moved by 5 % of its range (backwards at its upper bound).
+            let steps: Vec<f64> = params
+                .iter()
+                .enumerate()
+                .map(|(j, p)| {
+                    let h0 = 0.05 * (p.high - p.low);
+                    if theta[j] + h0 <= p.high { h0 } else { -h0 }
+                })
+                .collect();
+            let moved_settings = steps
+                .iter()
+                .enumerate()
+                .map(|(j, h)| {
+                    let mut t = theta.clone();
+                    t[j] += h;
+                    setting(it, &format!("param-{j}"), &t)
+                })
                 .collect::<Result<Vec<_>>>()?;
+            // With --slurm the P moved settings go into one job array.
             let hows: Vec<Simulate> = moved_settings
                 .iter()
                 .map(|(path, out)| at(path, out, args, &set))
@@ -356,8 +367,9 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             prefetch(&rows, &hows)?;
             let mut jac = DMatrix::zeros(rows.len(), n);
             for (j, p) in params.iter().enumerate() {
-                let (h, t) = step(j);
-                let (moved, _) = run(it, &format!("param-{j}"), &t)?;
+                let h = steps[j];
+                let (path, out) = &moved_settings[j];
+                let (moved, _) = run_at(path, out)?;
                 for i in 0..rows.len() {
                     let m = moved[i].ok_or_else(|| {
                         anyhow!(
