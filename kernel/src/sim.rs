@@ -1100,7 +1100,7 @@ mod tests {
                 max: DVec3::splat(f64::INFINITY),
             },
         ];
-        let (mut refused, mut flagged) = (0, 0);
+        let mut refused = 0;
         for dom in domains {
             for limit2 in [1.0, f64::INFINITY] {
                 for &a in &values {
@@ -1118,7 +1118,6 @@ mod tests {
                                 refused += 1;
                                 assert!(!cheap, "missed {exact:?} at x {x} v {v} w {w}");
                             }
-                            flagged += usize::from(!cheap);
                         }
                     }
                 }
@@ -1133,6 +1132,5 @@ mod tests {
             1.0,
             domains[0]
         ));
-        assert!(flagged >= refused);
     }
 }
