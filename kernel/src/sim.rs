@@ -64,6 +64,9 @@ pub struct Setup {
 }
 
 pub struct Simulation {
+    /// The particles. Between steps their positions and velocities may be edited; their
+    /// masses, inertias and order change only through the simulation, which caches what
+    /// it derives from them.
     pub particles: Particles,
     pub model: ContactModel,
     pub walls: Vec<Wall>,
@@ -92,6 +95,12 @@ pub struct Simulation {
     pair_out: Vec<ContactOut>,
     walls_near: WallContacts,
     ref_position: Vec<DVec3>,
+    /// Each particle's half-step kick factors (dt/2 / m, dt/2 / I), computed by the same
+    /// expressions the kicks would evaluate, so the bits are the same as dividing at each
+    /// kick, without two divisions per particle per half kick. Refreshed with every list
+    /// rebuild (which follows each insertion and reorder) and step change; a particle's
+    /// mass and inertia never change once it exists.
+    kick_factor: Vec<(f64, f64)>,
     wall_ref_offset: Vec<DVec3>,
     speed_limit: f64,
     /// Set by a reorder, consumed by the rebuild that follows it.
@@ -288,6 +297,7 @@ impl Simulation {
             pair_out: vec![],
             walls_near: WallContacts::empty(),
             ref_position: vec![],
+            kick_factor: vec![],
             wall_ref_offset: vec![DVec3::ZERO; nwalls],
             speed_limit,
             pending_order: None,
@@ -343,6 +353,10 @@ impl Simulation {
     /// One velocity-Verlet step.
     pub fn advance(&mut self) -> Result<()> {
         let dt = self.dt;
+        if self.kick_factor.len() != self.particles.len() {
+            self.refresh_kick_factor();
+        }
+        let kick_factor = &self.kick_factor;
         let max_disp2 = self.pool.install(|| {
             let p = &mut self.particles;
             p.position
@@ -351,15 +365,15 @@ impl Simulation {
                 .zip(p.angular_velocity.par_chunks_mut(CHUNK))
                 .zip(p.force.par_chunks(CHUNK))
                 .zip(p.torque.par_chunks(CHUNK))
-                .zip(p.mass.par_chunks(CHUNK))
-                .zip(p.inertia.par_chunks(CHUNK))
+                .zip(kick_factor.par_chunks(CHUNK))
                 .zip(self.ref_position.par_chunks(CHUNK))
                 .with_max_len(chunks_per_task())
-                .map(|(((((((x, v), w), f), t), m), inertia), x0)| {
+                .map(|((((((x, v), w), f), t), kf), x0)| {
                     let mut worst: f64 = 0.0;
                     for k in 0..x.len() {
-                        v[k] += f[k] * (0.5 * dt / m[k]);
-                        w[k] += t[k] * (0.5 * dt / inertia[k]);
+                        let (kv, kw) = kf[k];
+                        v[k] += f[k] * kv;
+                        w[k] += t[k] * kw;
                         x[k] += v[k] * dt;
                         worst = worst.max((x[k] - x0[k]).length_squared());
                     }
@@ -464,6 +478,7 @@ impl Simulation {
         self.pair_out
             .resize(self.pairs.len(), ContactOut::default());
         self.ref_position.clone_from(&self.particles.position);
+        self.refresh_kick_factor();
         for (r, w) in self.wall_ref_offset.iter_mut().zip(&self.walls) {
             *r = w.offset;
         }
@@ -579,6 +594,10 @@ impl Simulation {
             (&p.position, &p.radius, &p.mass, &p.inertia, &p.material);
         let limit2 = self.speed_limit * self.speed_limit;
         let dom = self.domain;
+        if self.kick_factor.len() != n {
+            fill_kick_factors(&mut self.kick_factor, mass, inertia, dt);
+        }
+        let kick_factor = &self.kick_factor;
         let failures: Vec<Option<(usize, Failure)>> = self.pool.install(|| {
             p.force
                 .par_chunks_mut(CHUNK)
@@ -682,8 +701,9 @@ impl Simulation {
                             fs[k] = f;
                             ts[k] = t;
                             if kick {
-                                vs[k] += f * (0.5 * dt / mass[i]);
-                                ws[k] += t * (0.5 * dt / inertia[i]);
+                                let (kv, kw) = kick_factor[i];
+                                vs[k] += f * kv;
+                                ws[k] += t * kw;
                                 plausible_all &= plausible(pos[i], vs[k], ws[k], limit2, dom);
                             }
                         }
@@ -888,6 +908,7 @@ impl Simulation {
         self.time_origin = self.time;
         self.step_origin = self.step;
         self.dt = dt;
+        self.refresh_kick_factor();
         self.loaded_step_warned = false;
         if let Some(w) = rayleigh_step_warning(dt, self.rayleigh_time) {
             if !self.warnings.contains(&w) {
@@ -895,6 +916,11 @@ impl Simulation {
             }
         }
         Ok(())
+    }
+
+    fn refresh_kick_factor(&mut self) {
+        let p = &self.particles;
+        fill_kick_factors(&mut self.kick_factor, &p.mass, &p.inertia, self.dt);
     }
 
     /// Numbers of intact and of broken bonds.
@@ -940,6 +966,7 @@ impl Simulation {
             + self.pairs.heap_bytes()
             + self.pair_out.capacity() * std::mem::size_of::<ContactOut>()
             + self.ref_position.capacity() * 24
+            + self.kick_factor.capacity() * 16
             + self.walls_near.heap_bytes()
             // A B-tree entry (two ids and a time) with its share of the node, roughly.
             + self.retired_bonds.len() * 24
@@ -968,6 +995,18 @@ impl Simulation {
 }
 
 /// Refuses a time step that is not a positive number.
+/// Refills `out` with every particle's half-step kick factors (dt/2 / m, dt/2 / I):
+/// velocity-Verlet's half kick is v += F (dt/2 / m), omega += T (dt/2 / I). In place, so
+/// a rebuild allocates nothing once the count of particles stops growing.
+fn fill_kick_factors(out: &mut Vec<(f64, f64)>, mass: &[f64], inertia: &[f64], dt: f64) {
+    out.clear();
+    out.extend(
+        mass.iter()
+            .zip(inertia)
+            .map(|(m, i)| (0.5 * dt / m, 0.5 * dt / i)),
+    );
+}
+
 fn check_dt(dt: f64) -> Result<()> {
     if dt > 0.0 && dt.is_finite() {
         return Ok(());
