@@ -97,9 +97,9 @@ pub struct Simulation {
     ref_position: Vec<DVec3>,
     /// Each particle's half-step kick factors (dt/2 / m, dt/2 / I), computed by the same
     /// expressions the kicks would evaluate, so the bits are the same as dividing at each
-    /// kick, without two divisions per particle per half kick. Refreshed with every list
-    /// rebuild (which follows each insertion and reorder) and step change; a particle's
-    /// mass and inertia never change once it exists.
+    /// kick, without two divisions per particle per half kick. Refreshed when particles are
+    /// inserted or reordered and when the step changes (a particle's mass and inertia never
+    /// change once it exists); `advance` fills them on its first call.
     kick_factor: Vec<(f64, f64)>,
     wall_ref_offset: Vec<DVec3>,
     speed_limit: f64,
@@ -437,6 +437,7 @@ impl Simulation {
         }
         if made > 0 {
             self.ref_position.resize(self.particles.len(), DVec3::ZERO);
+            self.refresh_kick_factor();
         }
         made
     }
@@ -450,6 +451,7 @@ impl Simulation {
         let grid = crate::neighbor::CellGrid::build(&p.position, 2.0 * r_max);
         let order = grid.cell_order().to_vec();
         self.particles.permute(&order);
+        self.refresh_kick_factor();
         self.pending_order = Some(order);
     }
 
@@ -478,7 +480,6 @@ impl Simulation {
         self.pair_out
             .resize(self.pairs.len(), ContactOut::default());
         self.ref_position.clone_from(&self.particles.position);
-        self.refresh_kick_factor();
         for (r, w) in self.wall_ref_offset.iter_mut().zip(&self.walls) {
             *r = w.offset;
         }
@@ -594,9 +595,8 @@ impl Simulation {
             (&p.position, &p.radius, &p.mass, &p.inertia, &p.material);
         let limit2 = self.speed_limit * self.speed_limit;
         let dom = self.domain;
-        if self.kick_factor.len() != n {
-            fill_kick_factors(&mut self.kick_factor, mass, inertia, dt);
-        }
+        // `advance` refreshed them for this step's particles.
+        debug_assert!(!kick || self.kick_factor.len() == n);
         let kick_factor = &self.kick_factor;
         let failures: Vec<Option<(usize, Failure)>> = self.pool.install(|| {
             p.force
@@ -918,6 +918,7 @@ impl Simulation {
         Ok(())
     }
 
+    /// Recomputes the kick factors from the particles and the step.
     fn refresh_kick_factor(&mut self) {
         let p = &self.particles;
         fill_kick_factors(&mut self.kick_factor, &p.mass, &p.inertia, self.dt);
@@ -994,7 +995,6 @@ impl Simulation {
     }
 }
 
-/// Refuses a time step that is not a positive number.
 /// Refills `out` with every particle's half-step kick factors (dt/2 / m, dt/2 / I):
 /// velocity-Verlet's half kick is v += F (dt/2 / m), omega += T (dt/2 / I). In place, so
 /// a rebuild allocates nothing once the count of particles stops growing.
@@ -1007,6 +1007,7 @@ fn fill_kick_factors(out: &mut Vec<(f64, f64)>, mass: &[f64], inertia: &[f64], d
     );
 }
 
+/// Refuses a time step that is not a positive number.
 fn check_dt(dt: f64) -> Result<()> {
     if dt > 0.0 && dt.is_finite() {
         return Ok(());

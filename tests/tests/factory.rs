@@ -98,3 +98,54 @@ fn bad_factory_input_is_refused() {
             .contains("factory.rate")
     );
 }
+
+/// The half kicks use each particle's own mass and inertia after the factory has added
+/// particles and after the simulation has reordered them (every `SORT_EVERY` steps): in free
+/// fall every particle, large or small (masses 1 : 8), gains g dt of speed per step.
+#[test]
+fn created_and_reordered_particles_fall_with_g() {
+    let dt = 1e-5;
+    let mut s = tilth_kernel::sim::Simulation::new(tilth_kernel::sim::Setup {
+        model: model(&common::spec("hertz", None, None, None), &[]),
+        particles: Particles::default(),
+        walls: vec![],
+        factories: vec![Factory::new(spec(Basis::Number, f64::INFINITY, 400, 5)).unwrap()],
+        dt,
+        gravity: DVec3::new(0.0, 0.0, -9.81),
+        skin: 0.2 * R,
+        threads: 1,
+        domain: domain(1.0),
+    })
+    .unwrap();
+    let by_id = |s: &tilth_kernel::sim::Simulation| {
+        let mut v = vec![f64::NAN; s.particles.len()];
+        for (k, &id) in s.particles.id.iter().enumerate() {
+            v[id as usize] = s.particles.velocity[k].z;
+        }
+        v
+    };
+    // Past the first insertion, then across the first reorder.
+    let steps = tilth_kernel::sim::SORT_EVERY - 10;
+    s.run(steps).unwrap();
+    assert_eq!(s.particles.len(), 400, "the factory placed its particles");
+    let before = by_id(&s);
+    s.run(20).unwrap();
+    let after = by_id(&s);
+    let reordered = s
+        .particles
+        .id
+        .iter()
+        .enumerate()
+        .any(|(k, &id)| id as usize != k);
+    assert!(reordered, "the reorder changed the particles' order");
+    let big = s.particles.radius.iter().filter(|&&r| r == 1e-3).count();
+    assert!(big > 100 && big < 300, "both sizes present: {big} large");
+    for (id, (b, a)) in before.iter().zip(&after).enumerate() {
+        let gain = b - a;
+        assert!(
+            (gain - 9.81 * 20.0 * dt).abs() < 1e-12,
+            "particle {id} gained {gain} m/s in 20 steps, not {}",
+            9.81 * 20.0 * dt
+        );
+    }
+}
