@@ -89,9 +89,10 @@ impl CellGrid {
         (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
     }
 
-    /// Calls `f(j)` for every binned point in the 27 cells around `p`.
+    /// Calls `f(run)` for each run of binned points in the 27 cells around `p`: the cells of
+    /// one row of the 3 x 3 x 3 block are consecutive, so each row is one slice.
     #[inline]
-    pub fn for_each_near(&self, p: DVec3, mut f: impl FnMut(u32)) {
+    pub fn for_each_near_run(&self, p: DVec3, mut f: impl FnMut(&[u32])) {
         let c = self.coords(p);
         let lo = |k: usize| c[k].saturating_sub(1);
         let hi = |k: usize| (c[k] + 1).min(self.dims[k] - 1);
@@ -99,11 +100,15 @@ impl CellGrid {
             for y in lo(1)..=hi(1) {
                 let row = (z * self.dims[1] + y) * self.dims[0];
                 let (a, b) = (row + lo(0), row + hi(0));
-                for &j in &self.items[self.start[a] as usize..self.start[b + 1] as usize] {
-                    f(j);
-                }
+                f(&self.items[self.start[a] as usize..self.start[b + 1] as usize]);
             }
         }
+    }
+
+    /// Calls `f(j)` for every binned point in the 27 cells around `p`.
+    #[inline]
+    pub fn for_each_near(&self, p: DVec3, mut f: impl FnMut(u32)) {
+        self.for_each_near_run(p, |run| run.iter().for_each(|&j| f(j)));
     }
 }
 
