@@ -918,10 +918,19 @@ impl Simulation {
         Ok(())
     }
 
-    /// Recomputes the kick factors from the particles and the step.
+    /// Recomputes every particle's half-step kick factors (dt/2 / m, dt/2 / I) from the
+    /// particles and the step: velocity-Verlet's half kick is v += F (dt/2 / m),
+    /// omega += T (dt/2 / I). In place, so it allocates nothing once the count of particles
+    /// stops growing.
     fn refresh_kick_factor(&mut self) {
-        let p = &self.particles;
-        fill_kick_factors(&mut self.kick_factor, &p.mass, &p.inertia, self.dt);
+        let (p, dt) = (&self.particles, self.dt);
+        self.kick_factor.clear();
+        self.kick_factor.extend(
+            p.mass
+                .iter()
+                .zip(&p.inertia)
+                .map(|(m, i)| (0.5 * dt / m, 0.5 * dt / i)),
+        );
     }
 
     /// Numbers of intact and of broken bonds.
@@ -993,18 +1002,6 @@ impl Simulation {
         }
         h
     }
-}
-
-/// Refills `out` with every particle's half-step kick factors (dt/2 / m, dt/2 / I):
-/// velocity-Verlet's half kick is v += F (dt/2 / m), omega += T (dt/2 / I). In place, so
-/// a rebuild allocates nothing once the count of particles stops growing.
-fn fill_kick_factors(out: &mut Vec<(f64, f64)>, mass: &[f64], inertia: &[f64], dt: f64) {
-    out.clear();
-    out.extend(
-        mass.iter()
-            .zip(inertia)
-            .map(|(m, i)| (0.5 * dt / m, 0.5 * dt / i)),
-    );
 }
 
 /// Refuses a time step that is not a positive number.
