@@ -18,6 +18,7 @@
 //! - [`sim::Simulation`]: velocity-Verlet stepping, failure detection, determinism.
 //! - [`timestep`], [`step_check`]: the step a scene may take, before a run and from its
 //!   contacts during one.
+//! - [`timing`]: where a run's time goes, part by part of the step.
 
 // Range checks are written `!(x > 0.0)` on purpose: the negation also refuses NaN, which
 // `x <= 0.0` would let through.
@@ -33,6 +34,7 @@ pub mod particles;
 pub mod sim;
 pub mod step_check;
 pub mod timestep;
+pub mod timing;
 pub mod wall;
 
 pub use error::KernelError;

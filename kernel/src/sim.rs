@@ -23,6 +23,7 @@ use crate::neighbor::{CHUNK, PairList, WallContacts, build_wall_contacts, chunks
 use crate::particles::Particles;
 use crate::step_check::{PackingFrequency, loaded_step_warning, packing_frequency};
 use crate::timestep::{BOND_WARN_FRACTION, WARN_FRACTION, rayleigh_time};
+use crate::timing::{Laps, PhaseTimes};
 use crate::wall::{Hit, Wall};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -80,6 +81,8 @@ pub struct Simulation {
     pub warnings: Vec<String>,
     /// Neighbour list rebuilds so far.
     pub rebuilds: u64,
+    /// Wall-clock time per part of the step, summed over every step so far.
+    pub times: PhaseTimes,
     /// Rayleigh time of the smallest particle, s.
     pub rayleigh_time: f64,
     /// The packing's stiffest contact mode at the last reorder (every [`SORT_EVERY`]
@@ -286,6 +289,7 @@ impl Simulation {
             domain,
             warnings,
             rebuilds: 0,
+            times: PhaseTimes::default(),
             rayleigh_time: t_r,
             packing_frequency: None,
             loaded_step_warned: false,
@@ -352,6 +356,7 @@ impl Simulation {
 
     /// One velocity-Verlet step.
     pub fn advance(&mut self) -> Result<()> {
+        let mut laps = Laps::start();
         let dt = self.dt;
         if self.kick_factor.len() != self.particles.len() {
             self.refresh_kick_factor();
@@ -391,8 +396,11 @@ impl Simulation {
         self.time = self.time_origin + (self.step - self.step_origin) as f64 * dt;
         // Factories fill in batches: a new particle forces a list rebuild, so inserting a
         // few every step would rebuild every step.
+        self.times.integrate += laps.lap();
         let created = if self.step % INSERT_EVERY == 0 {
-            self.insert_particles()
+            let made = self.insert_particles();
+            self.times.insert += laps.lap();
+            made
         } else {
             0
         };
@@ -406,6 +414,7 @@ impl Simulation {
         if sort {
             self.check_loaded_step();
         }
+        self.times.neighbor += laps.lap();
         match self.compute_forces(true) {
             None => Ok(()),
             Some((i, kind)) => Err(self.failure(i, kind)),
@@ -540,6 +549,7 @@ impl Simulation {
     /// to each particle as soon as its force is known (one pass over memory instead of two)
     /// and returns the first particle in a failed state.
     fn compute_forces(&mut self, kick: bool) -> Option<(usize, Failure)> {
+        let mut laps = Laps::start();
         let dt = self.dt;
         let time = self.time;
         let p = &self.particles;
@@ -562,6 +572,8 @@ impl Simulation {
                     }
                 });
         });
+
+        self.times.pair += laps.lap();
 
         // Particle phase: each particle's own sum, in a fixed order.
         let gravity = self.gravity;
@@ -743,6 +755,7 @@ impl Simulation {
                 w.impulse += w.force * self.dt;
             }
         }
+        self.times.particle += laps.lap();
         failure
     }
 

@@ -193,6 +193,7 @@ fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
     }
     let mut progress = Progress::new(args.steps, !args.quiet);
     let mut stepping = Duration::ZERO;
+    let times_before = sim.times;
     let chunk = 100;
     while sim.step < args.steps {
         let k = chunk.min(args.steps - sim.step);
@@ -210,6 +211,10 @@ fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
     writeln!(out, "threads: {}", args.threads)?;
     writeln!(out, "setup seconds: {setup:.3}")?;
     writeln!(out, "wall seconds: {secs:.3}")?;
+    // As LIGGGHTS's "Pair / Neigh / Other time (%)" after its loop.
+    writeln!(out, "time per part of the stepping loop:")?;
+    let parts = super::report::time_breakdown(&(sim.times - times_before), secs);
+    super::report::write_time_breakdown(out, &parts, "  ")?;
     writeln!(out, "neighbour rebuilds: {}", sim.rebuilds)?;
     let (touching, _) = sim.contact_counts();
     writeln!(

@@ -4,6 +4,7 @@ use crate::config::SceneInfo;
 use serde::Serialize;
 use std::io::{self, Write};
 use tilth_kernel::sim::Simulation;
+use tilth_kernel::timing::PhaseTimes;
 
 #[derive(Debug, Serialize)]
 pub struct RunReport {
@@ -27,6 +28,9 @@ pub struct RunReport {
     pub wall_seconds: f64,
     /// Sum over steps of the particle count, divided by `wall_seconds`.
     pub particle_steps_per_second: f64,
+    /// Where `wall_seconds` went, part by part of the step, then `other` (recording,
+    /// progress, whatever the loop did besides stepping).
+    pub time_breakdown: Vec<TimePart>,
     pub particles: usize,
     /// Translational plus rotational, J.
     pub kinetic_energy: f64,
@@ -44,6 +48,52 @@ pub struct RunReport {
     pub warnings: Vec<String>,
     /// Samples every `output.every` (empty without it).
     pub samples: Vec<Sample>,
+}
+
+/// One part of the stepping loop's time.
+#[derive(Debug, Clone, Serialize)]
+pub struct TimePart {
+    pub part: &'static str,
+    /// s.
+    pub seconds: f64,
+    /// Share of the loop's wall time, %.
+    pub percent: f64,
+}
+
+/// The kernel's time per part of the step over a loop of `wall_seconds`, then `other`: the
+/// rest of the loop (never negative).
+pub fn time_breakdown(times: &PhaseTimes, wall_seconds: f64) -> Vec<TimePart> {
+    let share = |s: f64| {
+        if wall_seconds > 0.0 {
+            100.0 * s / wall_seconds
+        } else {
+            0.0
+        }
+    };
+    let mut parts: Vec<TimePart> = times
+        .parts()
+        .iter()
+        .map(|&(part, d)| TimePart {
+            part,
+            seconds: d.as_secs_f64(),
+            percent: share(d.as_secs_f64()),
+        })
+        .collect();
+    let other = (wall_seconds - times.total().as_secs_f64()).max(0.0);
+    parts.push(TimePart {
+        part: "other",
+        seconds: other,
+        percent: share(other),
+    });
+    parts
+}
+
+/// The breakdown as an aligned table, one part a line, each line starting with `indent`.
+pub fn write_time_breakdown(out: &mut dyn Write, parts: &[TimePart], indent: &str) -> io::Result<()> {
+    for p in parts {
+        writeln!(out, "{indent}{:<10} {:>9.3} s {:>5.1} %", p.part, p.seconds, p.percent)?;
+    }
+    Ok(())
 }
 
 #[derive(Debug, Serialize)]
@@ -101,6 +151,7 @@ impl RunReport {
         threads: usize,
         setup_seconds: f64,
         wall_seconds: f64,
+        times: &PhaseTimes,
         particle_steps: u64,
         samples: Vec<Sample>,
     ) -> RunReport {
@@ -150,6 +201,7 @@ impl RunReport {
             setup_seconds,
             wall_seconds,
             particle_steps_per_second: particle_steps as f64 / wall_seconds.max(1e-12),
+            time_breakdown: time_breakdown(times, wall_seconds),
             particles: sim.particles.len(),
             kinetic_energy: sim.particles.kinetic_energy(),
             rotational_kinetic_energy: p
@@ -217,6 +269,8 @@ impl RunReport {
             "speed               {:.3e} particle-steps/s",
             self.particle_steps_per_second
         )?;
+        writeln!(out, "time per part       of the stepping loop:")?;
+        write_time_breakdown(out, &self.time_breakdown, "                    ")?;
         writeln!(
             out,
             "kinetic energy      {:.4e} J ({:.4e} J rotational), fastest particle {:.3e} m/s",

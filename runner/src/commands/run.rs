@@ -85,6 +85,7 @@ pub fn simulate(
         samples.push(Sample::of(&sim));
     }
     let mut particle_steps: u64 = 0;
+    let times_before = sim.times;
     let start = Instant::now();
     for k in 1..=steps {
         let stepped = sim.advance();
@@ -106,6 +107,7 @@ pub fn simulate(
         threads,
         setup_seconds,
         wall_seconds,
+        &(sim.times - times_before),
         particle_steps,
         samples,
     ))

@@ -263,6 +263,7 @@ fn simulate(
         }
         Ok(())
     };
+    let times_before = sim.times;
     let t0 = Instant::now();
     let mut particle_steps: u64 = 0;
     let mut interrupted = false;
@@ -306,7 +307,8 @@ fn simulate(
         let h: Heap = observe::heap(&sim, t);
         summary.heap = serde_json::to_value(h).ok();
     }
-    let report = RunReport::new(&sim, &info, threads, 0.0, wall, particle_steps, vec![]);
+    let times = sim.times - times_before;
+    let report = RunReport::new(&sim, &info, threads, 0.0, wall, &times, particle_steps, vec![]);
     summary.report = serde_json::to_value(&report).ok();
     if let Some(e) = failure {
         summary.mcap = Some("run.mcap.partial".into());
