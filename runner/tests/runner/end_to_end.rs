@@ -44,6 +44,20 @@ fn run_json_reports_the_scene() {
             v[key]
         );
     }
+    // Where the stepping loop's time went: the step's parts in order, then the rest; they
+    // were timed inside the loop, so they add up to its wall time.
+    let parts = v["time_breakdown"].as_array().unwrap();
+    let names: Vec<&str> = parts.iter().map(|p| p["part"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        ["integrate", "insert", "neighbor", "pair", "particle", "other"]
+    );
+    let seconds: Vec<f64> = parts.iter().map(|p| p["seconds"].as_f64().unwrap()).collect();
+    assert!(seconds.iter().all(|&s| s >= 0.0), "{seconds:?}");
+    assert!(seconds[3] > 0.0, "the pair forces took no time: {seconds:?}");
+    let wall = v["wall_seconds"].as_f64().unwrap();
+    let sum: f64 = seconds.iter().sum();
+    assert!((sum - wall).abs() <= 1e-9 * wall, "parts {sum} s, loop {wall} s");
     // The floor carries (part of) the weight: pushed down, not pulled up.
     let fraction = v["walls"][0]["weight_fraction"].as_f64().unwrap();
     assert!(fraction > 0.0 && fraction < 1.5, "{fraction}");
@@ -59,6 +73,7 @@ fn run_text_summary() {
         "scene ",
         "steps ",
         "speed ",
+        "time per part",
         "neighbour rebuilds",
         "wall floor",
     ] {
