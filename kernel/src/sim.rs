@@ -312,7 +312,7 @@ impl Simulation {
         sim.check_overlaps()?;
         sim.insert_particles();
         sim.rebuild();
-        sim.compute_forces(false);
+        sim.compute_forces(false, true);
         Ok(sim)
     }
 
@@ -362,7 +362,10 @@ impl Simulation {
             self.refresh_kick_factor();
         }
         let kick_factor = &self.kick_factor;
-        let max_disp2 = self.pool.install(|| {
+        let dom = self.domain;
+        // The positions change here only, so they are checked here, while in registers (the
+        // particle phase then tests only what its kick changes).
+        let (max_disp2, mut positions_ok) = self.pool.install(|| {
             let p = &mut self.particles;
             p.position
                 .par_chunks_mut(CHUNK)
@@ -375,16 +378,25 @@ impl Simulation {
                 .with_max_len(chunks_per_task())
                 .map(|((((((x, v), w), f), t), kf), x0)| {
                     let mut worst: f64 = 0.0;
+                    // The chunk's bounding box, and a sum that is zero only if every
+                    // coordinate is finite (x * 0 is NaN for an infinite or NaN x).
+                    let (mut lo, mut hi, mut zero) = (x[0], x[0], DVec3::ZERO);
                     for k in 0..x.len() {
                         let (kv, kw) = kf[k];
                         v[k] += f[k] * kv;
                         w[k] += t[k] * kw;
                         x[k] += v[k] * dt;
                         worst = worst.max((x[k] - x0[k]).length_squared());
+                        lo = lo.min(x[k]);
+                        hi = hi.max(x[k]);
+                        zero += x[k] * 0.0;
                     }
-                    worst
+                    let ok = zero == DVec3::ZERO
+                        && plausible_position(lo, dom)
+                        && plausible_position(hi, dom);
+                    (worst, ok)
                 })
-                .reduce(|| 0.0, f64::max)
+                .reduce(|| (0.0, true), |a, b| (a.0.max(b.0), a.1 & b.1))
         });
         let mut wall_disp: f64 = 0.0;
         for (w, r0) in self.walls.iter_mut().zip(&self.wall_ref_offset) {
@@ -399,6 +411,8 @@ impl Simulation {
         self.times.integrate += laps.lap();
         let created = if self.step % INSERT_EVERY == 0 {
             let made = self.insert_particles();
+            let new = &self.particles.position[self.particles.len() - made..];
+            positions_ok &= new.iter().all(|&x| plausible_position(x, dom));
             self.times.insert += laps.lap();
             made
         } else {
@@ -415,7 +429,7 @@ impl Simulation {
             self.check_loaded_step();
         }
         self.times.neighbor += laps.lap();
-        match self.compute_forces(true) {
+        match self.compute_forces(true, positions_ok) {
             None => Ok(()),
             Some((i, kind)) => Err(self.failure(i, kind)),
         }
@@ -547,8 +561,10 @@ impl Simulation {
 
     /// Computes every force and torque. With `kick`, also applies the step's second half kick
     /// to each particle as soon as its force is known (one pass over memory instead of two)
-    /// and returns the first particle in a failed state.
-    fn compute_forces(&mut self, kick: bool) -> Option<(usize, Failure)> {
+    /// and returns the first particle in a failed state. `positions_ok`: whether every
+    /// position passed [`plausible_position`] since it last changed; when not, every
+    /// particle gets the exact test.
+    fn compute_forces(&mut self, kick: bool, positions_ok: bool) -> Option<(usize, Failure)> {
         let mut laps = Laps::start();
         let dt = self.dt;
         let time = self.time;
@@ -714,14 +730,17 @@ impl Simulation {
                             ts[k] = t;
                             if kick {
                                 let (kv, kw) = kick_factor[i];
-                                vs[k] += f * kv;
-                                ws[k] += t * kw;
-                                plausible_all &= plausible(pos[i], vs[k], ws[k], limit2, dom);
+                                // Tested from registers: reading back what was just stored
+                                // loads across two stores, which the CPU cannot forward.
+                                let (v, w) = (vs[k] + f * kv, ws[k] + t * kw);
+                                vs[k] = v;
+                                ws[k] = w;
+                                plausible_all &= plausible_motion(v, w, limit2);
                             }
                         }
                         // The exact test only for a chunk the cheap one flagged: the first
                         // failing particle in index order, as a test of each would find it.
-                        if plausible_all {
+                        if plausible_all && positions_ok {
                             return None;
                         }
                         (0..fs.len()).find_map(|k| {
@@ -1052,18 +1071,32 @@ fn bond_step_warning(dt: f64, t_b: f64) -> Option<String> {
     })
 }
 
-/// A cheap test that is false for every state [`check`] refuses (and for a few it accepts,
-/// such as a finite spin too large to square). Written with `&`, not `&&`: no branch per
-/// particle. The exact test on each particle took about a fifth of the particle phase in a
-/// dilute flow; this one, about half as much (BENCHMARKS.md, fourteenth sitting).
-#[inline(always)]
+/// The cheap test, as the two halves below make it: false for every state [`check`]
+/// refuses (and for a few it accepts, such as a finite spin too large to square).
+#[cfg(test)]
 fn plausible(x: DVec3, v: DVec3, w: DVec3, limit2: f64, dom: Aabb) -> bool {
-    let (x2, v2, w2) = (x.length_squared(), v.length_squared(), w.length_squared());
+    plausible_position(x, dom) & plausible_motion(v, w, limit2)
+}
+
+// The cheap test in two halves, each made where what it tests changes: the position in the
+// drift, while it is in registers; the velocities in the particle phase, after its kick.
+// Written with `&`, not `&&`: no branch per particle. The exact test on each particle took
+// about a fifth of the particle phase in a dilute flow; the cheap one about half as much
+// (BENCHMARKS.md, fourteenth sitting), and loading each position again for it was most of
+// what was left (sixteenth sitting).
+
+/// The velocity half of the cheap test.
+#[inline(always)]
+fn plausible_motion(v: DVec3, w: DVec3, limit2: f64) -> bool {
+    let (v2, w2) = (v.length_squared(), w.length_squared());
     // A NaN fails every comparison; an infinity makes its square infinite.
-    (v2 <= limit2)
-        & (v2 < f64::INFINITY)
-        & (w2 < f64::INFINITY)
-        & (x2 < f64::INFINITY)
+    (v2 <= limit2) & (v2 < f64::INFINITY) & (w2 < f64::INFINITY)
+}
+
+/// The position half of the cheap test.
+#[inline(always)]
+fn plausible_position(x: DVec3, dom: Aabb) -> bool {
+    (x.length_squared() < f64::INFINITY)
         & (x.x >= dom.min.x)
         & (x.y >= dom.min.y)
         & (x.z >= dom.min.z)

@@ -176,3 +176,36 @@ fn escaping_particle_names_the_open_geometry() {
         "{err}"
     );
 }
+
+#[test]
+fn an_escape_is_caught_at_the_step_the_particle_crosses_the_boundary() {
+    // Free fall from rest: velocity Verlet is exact under a constant force, so after n steps
+    // z_n = -g dt^2 n^2 / 2, and the particle leaves through the floor of the domain at the
+    // first n with g dt^2 n^2 / 2 > |z_min|.
+    let (g, dt) = (9.81, 1e-5);
+    let z_min = domain(0.1).min.z;
+    let n = ((2.0 * -z_min / (g * dt * dt)).sqrt().floor() as u64) + 1;
+    let mut p = Particles::default();
+    p.push(DVec3::ZERO, DVec3::ZERO, R, RHO, 0);
+    let mut st = setup(p, dt);
+    st.gravity = DVec3::new(0.0, 0.0, -g);
+    let mut s = Simulation::new(st).unwrap();
+    s.run(n - 1).unwrap();
+    let err = s.run(1).unwrap_err().to_string();
+    assert!(
+        err.contains(&format!("run stopped at step {n} ")) && err.contains("left the domain"),
+        "{err}"
+    );
+
+    // A position moved out of the domain between steps is caught at the next step.
+    let mut p = Particles::default();
+    p.push(DVec3::ZERO, DVec3::ZERO, R, RHO, 0);
+    let mut s = Simulation::new(setup(p, dt)).unwrap();
+    s.run(10).unwrap();
+    s.particles.position[0] = DVec3::new(0.0, 0.2, 0.0);
+    let err = s.run(1).unwrap_err().to_string();
+    assert!(
+        err.contains("run stopped at step 11 ") && err.contains("left the domain"),
+        "{err}"
+    );
+}
