@@ -28,6 +28,9 @@ use crate::wall::{Hit, Wall};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use wall_forces::{Body, WallList, WallRows, add_wall_forces};
+
+mod wall_forces;
 
 /// Steps between spatial reorderings of the particles (cell order, for cache locality; as
 /// LAMMPS's `atom_modify sort`). A fixed step schedule, not a rebuild count, so that runs
@@ -611,14 +614,23 @@ impl Simulation {
                 let (h1, h2) = hist.split_at_mut(len * stride);
                 let (f1, f2) = force.split_at_mut(len);
                 let (p1, p2) = point.split_at_mut(len);
-                wall_chunks.push((at, h1, f1, p1));
+                wall_chunks.push(WallRows {
+                    base: at,
+                    history: h1,
+                    force: f1,
+                    point: p1,
+                });
                 hist = h2;
                 force = f2;
                 point = p2;
                 at = end;
             }
         }
-        let (wstart, wwall, wfeat) = (&wc.start, &wc.wall, &wc.feature);
+        let wstart = &wc.start;
+        let list = WallList {
+            wall: &wc.wall,
+            feature: &wc.feature,
+        };
         let (pos, radius, mass, inertia, material) =
             (&p.position, &p.radius, &p.mass, &p.inertia, &p.material);
         let limit2 = self.speed_limit * self.speed_limit;
@@ -635,120 +647,72 @@ impl Simulation {
                 .zip(wall_chunks.into_par_iter())
                 .enumerate()
                 .with_max_len(chunks_per_task())
-                .map(
-                    |(c, ((((fs, ts), vs), ws), (wbase, whist, wforce, wpoint)))| {
-                        let mut hits: Vec<(f64, usize, Hit)> = vec![];
-                        // Whether every kicked particle of the chunk passed the cheap test.
-                        let mut plausible_all = true;
-                        for k in 0..fs.len() {
-                            let i = c * CHUNK + k;
-                            let mut f = gravity * mass[i];
-                            let mut t = DVec3::ZERO;
-                            for o in
-                                &out[pairs.row_start[i] as usize..pairs.row_start[i + 1] as usize]
-                            {
-                                f += o.force;
-                                t += o.torque_i;
-                            }
-                            for &kk in &pairs.rev_pair
-                                [pairs.rev_start[i] as usize..pairs.rev_start[i + 1] as usize]
-                            {
-                                let o = &out[kk as usize];
-                                f -= o.force;
-                                t += o.torque_j;
-                            }
-                            // Wall contacts: one group per wall; within a group (a mesh), nearer
-                            // triangles shadow contacts whose closest point lies on them.
-                            let (mut e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
-                            while e < end {
-                                let w = wwall[e] as usize;
-                                let mut g = e;
-                                while g < end && wwall[g] as usize == w {
-                                    g += 1;
-                                }
-                                let wall = &walls[w];
-                                let local = pos[i] - wall.offset;
-                                hits.clear();
-                                for q in e..g {
-                                    let h = wall.shape.hit(wfeat[q], local);
-                                    hits.push((h.distance, q, h));
-                                }
-                                if hits.len() > 1 {
-                                    hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                                }
-                                for a in 0..hits.len() {
-                                    let (_, q, h) = hits[a];
-                                    let lq = q - wbase;
-                                    let hist = &mut whist[lq * stride..(lq + 1) * stride];
-                                    let shadowed = (0..a).any(|b| {
-                                        let (_, qb, hb) = hits[b];
-                                        wforce[qb - wbase] != DVec3::ZERO
-                                            && wall.shape.feature_distance(hb.feature, h.point)
-                                                <= 1e-9 * radius[i]
-                                    });
-                                    let contact = if shadowed {
-                                        None
-                                    } else {
-                                        Contact::with_wall(
-                                            pos[i],
-                                            pos[i] - h.normal * h.distance,
-                                            radius[i],
-                                            mass[i],
-                                            inertia[i],
-                                            vs[k],
-                                            ws[k],
-                                            wall.velocity,
-                                            dt,
-                                        )
-                                    };
-                                    let res = contact.and_then(|ct| {
-                                        model.evaluate(
-                                            material[i] as usize,
-                                            wall.material as usize,
-                                            &ct,
-                                            hist,
-                                        )
-                                    });
-                                    match res {
-                                        Some(o) => {
-                                            f += o.force;
-                                            t += o.torque_i;
-                                            wforce[lq] = o.force;
-                                            wpoint[lq] = h.point + wall.offset;
-                                        }
-                                        None => {
-                                            if shadowed {
-                                                hist.fill(0.0);
-                                            }
-                                            wforce[lq] = DVec3::ZERO;
-                                        }
-                                    }
-                                }
-                                e = g;
-                            }
-                            fs[k] = f;
-                            ts[k] = t;
-                            if kick {
-                                let (kv, kw) = kick_factor[i];
-                                // Tested from registers: reading back what was just stored
-                                // loads across two stores, which the CPU cannot forward.
-                                let (v, w) = (vs[k] + f * kv, ws[k] + t * kw);
-                                vs[k] = v;
-                                ws[k] = w;
-                                plausible_all &= plausible_motion(v, w, limit2);
-                            }
+                .map(|(c, ((((fs, ts), vs), ws), mut mine))| {
+                    let mut hits: Vec<(f64, usize, Hit)> = vec![];
+                    // Whether every kicked particle of the chunk passed the cheap test.
+                    let mut plausible_all = true;
+                    for k in 0..fs.len() {
+                        let i = c * CHUNK + k;
+                        let mut f = gravity * mass[i];
+                        let mut t = DVec3::ZERO;
+                        for o in &out[pairs.row_start[i] as usize..pairs.row_start[i + 1] as usize]
+                        {
+                            f += o.force;
+                            t += o.torque_i;
                         }
-                        // The exact test only for a chunk the cheap one flagged: the first
-                        // failing particle in index order, as a test of each would find it.
-                        if plausible_all && positions_ok {
-                            return None;
+                        for &kk in &pairs.rev_pair
+                            [pairs.rev_start[i] as usize..pairs.rev_start[i + 1] as usize]
+                        {
+                            let o = &out[kk as usize];
+                            f -= o.force;
+                            t += o.torque_j;
                         }
-                        (0..fs.len()).find_map(|k| {
-                            let i = c * CHUNK + k;
-                            check(pos[i], vs[k], ws[k], limit2, dom).map(|f| (i, f))
-                        })
-                    },
-                )
+                        let (e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
+                        if e < end {
+                            let body = Body {
+                                x: pos[i],
+                                radius: radius[i],
+                                mass: mass[i],
+                                inertia: inertia[i],
+                                material: material[i] as usize,
+                                v: vs[k],
+                                w: ws[k],
+                            };
+                            (f, t) = add_wall_forces(
+                                &body,
+                                e..end,
+                                &list,
+                                &mut mine,
+                                walls,
+                                model,
+                                stride,
+                                dt,
+                                &mut hits,
+                                (f, t),
+                            );
+                        }
+                        fs[k] = f;
+                        ts[k] = t;
+                        if kick {
+                            let (kv, kw) = kick_factor[i];
+                            // Tested from registers: reading back what was just stored
+                            // loads across two stores, which the CPU cannot forward.
+                            let (v, w) = (vs[k] + f * kv, ws[k] + t * kw);
+                            vs[k] = v;
+                            ws[k] = w;
+                            plausible_all &= plausible_motion(v, w, limit2);
+                        }
+                    }
+                    // The exact test only for a chunk the cheap one flagged: the first
+                    // failing particle in index order, as a test of each would find it.
+                    if plausible_all && positions_ok {
+                        return None;
+                    }
+                    (0..fs.len()).find_map(|k| {
+                        let i = c * CHUNK + k;
+                        check(pos[i], vs[k], ws[k], limit2, dom).map(|f| (i, f))
+                    })
+                })
                 .collect()
         });
         let failure = failures.into_iter().flatten().next();

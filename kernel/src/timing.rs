@@ -103,6 +103,9 @@ mod tests {
             d.parts().map(|(_, t)| t),
             [ms(10), ms(0), ms(3), ms(20), ms(4)]
         );
-        assert_eq!(d.parts().map(|(n, _)| n), ["integrate", "insert", "neighbor", "pair", "particle"]);
+        assert_eq!(
+            d.parts().map(|(n, _)| n),
+            ["integrate", "insert", "neighbor", "pair", "particle"]
+        );
     }
 }

@@ -89,9 +89,17 @@ pub fn time_breakdown(times: &PhaseTimes, wall_seconds: f64) -> Vec<TimePart> {
 }
 
 /// The breakdown as an aligned table, one part a line, each line starting with `indent`.
-pub fn write_time_breakdown(out: &mut dyn Write, parts: &[TimePart], indent: &str) -> io::Result<()> {
+pub fn write_time_breakdown(
+    out: &mut dyn Write,
+    parts: &[TimePart],
+    indent: &str,
+) -> io::Result<()> {
     for p in parts {
-        writeln!(out, "{indent}{:<10} {:>9.3} s {:>5.1} %", p.part, p.seconds, p.percent)?;
+        writeln!(
+            out,
+            "{indent}{:<10} {:>9.3} s {:>5.1} %",
+            p.part, p.seconds, p.percent
+        )?;
     }
     Ok(())
 }

@@ -308,7 +308,16 @@ fn simulate(
         summary.heap = serde_json::to_value(h).ok();
     }
     let times = sim.times - times_before;
-    let report = RunReport::new(&sim, &info, threads, 0.0, wall, &times, particle_steps, vec![]);
+    let report = RunReport::new(
+        &sim,
+        &info,
+        threads,
+        0.0,
+        wall,
+        &times,
+        particle_steps,
+        vec![],
+    );
     summary.report = serde_json::to_value(&report).ok();
     if let Some(e) = failure {
         summary.mcap = Some("run.mcap.partial".into());
