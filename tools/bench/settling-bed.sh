@@ -30,7 +30,8 @@ declare -A R RUNS
 for round in $(seq "$ROUNDS"); do
   for c in sjkr jkr; do
     for t in 1 2; do
-      r=$("$TILTH" bench settling-bed --particles "$N" --steps "$S" --threads "$t" --cohesion "$c" --quiet | tail -1 | awk '{print $2}')
+      "$TILTH" bench settling-bed --particles "$N" --steps "$S" --threads "$t" --cohesion "$c" --quiet > "$work/tilth-$c$t.out"
+      r=$(tail -1 "$work/tilth-$c$t.out" | awk '{print $2}')
       RUNS[$c$t]="${RUNS[$c$t]:-} $r"
       echo "tilth --cohesion $c, ${t} thread(s), round $round: $r particle-steps/s"
     done
@@ -52,6 +53,14 @@ if command -v lmp >/dev/null; then
   R[lammps]=$(rate "$(loop_time "$work/lammps.out")")
   echo "LAMMPS: ${R[lammps]} particle-steps/s (loop time $(loop_time "$work/lammps.out") s)"
 fi
+# Where each code's loop time went (tilth: its last round), side by side with the peers' own
+# breakdowns (LIGGGHTS: Pair/Neigh/Comm/Outpt/Other; LAMMPS: its timing table).
+for c in sjkr jkr; do
+  echo "tilth --cohesion $c, 1 thread, time per part of the stepping loop:"
+  sed -n '/^time per part/,/^  other/p' "$work/tilth-${c}1.out" | tail -n +2
+done
+[ -f "$work/liggghts.out" ] && { echo "LIGGGHTS, time per part of the loop:"; grep -E "^(Pair|Neigh|Comm|Outpt|Modify|Other) +time" "$work/liggghts.out" | tail -5 | sed 's/^/  /'; }
+[ -f "$work/lammps.out" ] && { echo "LAMMPS, time per part of the loop:"; grep -E "^(Pair|Neigh|Comm|Output|Modify|Other) +\|" "$work/lammps.out" | tail -6 | sed 's/^/  /'; }
 for c in sjkr jkr; do
   awk -v a="${R[${c}1]}" -v b="${R[${c}2]}" -v c="$c" 'BEGIN { printf "tilth (%s) speed-up 1 -> 2 threads: %.2fx\n", c, b / a }'
 done
