@@ -50,14 +50,30 @@ fn run_json_reports_the_scene() {
     let names: Vec<&str> = parts.iter().map(|p| p["part"].as_str().unwrap()).collect();
     assert_eq!(
         names,
-        ["integrate", "insert", "neighbor", "pair", "particle", "other"]
+        [
+            "integrate",
+            "insert",
+            "neighbor",
+            "pair",
+            "particle",
+            "other"
+        ]
     );
-    let seconds: Vec<f64> = parts.iter().map(|p| p["seconds"].as_f64().unwrap()).collect();
+    let seconds: Vec<f64> = parts
+        .iter()
+        .map(|p| p["seconds"].as_f64().unwrap())
+        .collect();
     assert!(seconds.iter().all(|&s| s >= 0.0), "{seconds:?}");
-    assert!(seconds[3] > 0.0, "the pair forces took no time: {seconds:?}");
+    assert!(
+        seconds[3] > 0.0,
+        "the pair forces took no time: {seconds:?}"
+    );
     let wall = v["wall_seconds"].as_f64().unwrap();
     let sum: f64 = seconds.iter().sum();
-    assert!((sum - wall).abs() <= 1e-9 * wall, "parts {sum} s, loop {wall} s");
+    assert!(
+        (sum - wall).abs() <= 1e-9 * wall,
+        "parts {sum} s, loop {wall} s"
+    );
     // The floor carries (part of) the weight: pushed down, not pulled up.
     let fraction = v["walls"][0]["weight_fraction"].as_f64().unwrap();
     assert!(fraction > 0.0 && fraction < 1.5, "{fraction}");
