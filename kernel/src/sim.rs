@@ -2,7 +2,8 @@
 //!
 //! One step:
 //! 1. half kick and drift (v += F/m dt/2, omega += T/I dt/2, x += v dt), tracking the largest
-//!    displacement since the last neighbour-list build;
+//!    displacement since the last neighbour-list build and testing the new positions (finite,
+//!    inside the domain);
 //! 2. walls move; factories create particles;
 //! 3. rebuild the pair list and wall contact list when something moved more than skin/2
 //!    (history is carried over);
@@ -12,6 +13,8 @@
 //!    a fixed order;
 //! 6. second half kick, applied in the particle phase as each force is known, with the
 //!    failure checks (non-finite state, runaway speed, escape).
+//!
+//! The wall-clock time of each part is summed in [`Simulation::times`].
 //!
 //! Every sum runs in an order that does not depend on the thread count, so 1 and 2 threads
 //! give the same bits (work is split in fixed chunks of [`CHUNK`] rows).
@@ -409,9 +412,9 @@ impl Simulation {
         }
         self.step += 1;
         self.time = self.time_origin + (self.step - self.step_origin) as f64 * dt;
+        self.times.integrate += laps.lap();
         // Factories fill in batches: a new particle forces a list rebuild, so inserting a
         // few every step would rebuild every step.
-        self.times.integrate += laps.lap();
         let created = if self.step % INSERT_EVERY == 0 {
             let made = self.insert_particles();
             let new = &self.particles.position[self.particles.len() - made..];
