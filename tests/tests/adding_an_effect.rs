@@ -37,5 +37,5 @@ fn the_page_shows_the_compiled_law_and_its_test() {
     }
     // And the registry line it describes is there.
     let registry = std::fs::read_to_string(root.join("kernel/src/contact/laws/mod.rs")).unwrap();
-    assert!(registry.contains("    plastic_adhesion,\n"));
+    assert!(registry.contains("        plastic_adhesion: PlasticAdhesion,\n"));
 }

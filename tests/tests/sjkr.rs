@@ -7,7 +7,7 @@ use common::*;
 use glam::DVec3;
 use std::f64::consts::PI;
 use tilth_kernel::contact::laws::sjkr::ENTRY;
-use tilth_kernel::contact::{BuiltLaw, Contact, ExtraLaw, LawInput, ModelSpec};
+use tilth_kernel::contact::{AnyExtra, BuiltLaw, Contact, ExtraLaw, LawInput, ModelSpec};
 use tilth_kernel::param::Params;
 
 const K: f64 = 0.356e5;
@@ -31,7 +31,7 @@ fn area_wall(delta: f64, ri: f64) -> f64 {
 }
 
 /// The law on its own, built as the model builder builds it.
-fn law(k: f64) -> Box<dyn ExtraLaw> {
+fn law(k: f64) -> AnyExtra {
     let given = params(&[("cohesion_energy_density", k)]);
     let input = LawInput {
         material_i: &soil(),

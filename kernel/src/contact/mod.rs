@@ -23,10 +23,13 @@
 //! repulsive; vectors returned are forces and torques *on i* unless stated.
 
 pub mod geometry;
+#[macro_use]
+mod dispatch;
 pub mod laws;
 pub mod model;
 
 pub use geometry::Contact;
+pub use laws::{AnyBond, AnyDamping, AnyExtra, AnyNormal, AnyRolling, AnyTangential};
 pub use model::{BondStatus, ContactModel, ContactOut, ModelSpec, PairSpec};
 
 use crate::material::Material;
@@ -47,6 +50,9 @@ pub struct NormalForce {
 }
 
 /// Slot 1: the elastic normal force.
+///
+/// Every method is forwarded by the registry's enum: a new method goes into its list in
+/// `laws/mod.rs` too.
 pub trait NormalLaw: Send + Sync {
     fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce;
     /// How far beyond touching (m, >= 0) an established contact keeps acting, for contact
@@ -57,11 +63,17 @@ pub trait NormalLaw: Send + Sync {
 }
 
 /// Slot 2: a viscous damping coefficient (N s/m) for a spring of `stiffness` acting on `m_eff`.
+///
+/// Every method is forwarded by the registry's enum: a new method goes into its list in
+/// `laws/mod.rs` too.
 pub trait DampingLaw: Send + Sync {
     fn coefficient(&self, stiffness: f64, m_eff: f64) -> f64;
 }
 
 /// Slot 3: tangential (friction) force.
+///
+/// Every method is forwarded by the registry's enum: a new method goes into its list in
+/// `laws/mod.rs` too.
 pub trait TangentialLaw: Send + Sync {
     /// Current tangential stiffness (N/m); the pipeline turns it into a damping coefficient.
     fn stiffness(&self, c: &Contact, normal: &NormalForce) -> f64;
@@ -78,6 +90,9 @@ pub trait TangentialLaw: Send + Sync {
 }
 
 /// Slot 4: rolling resistance. Returns the torques on i and on j (N m).
+///
+/// Every method is forwarded by the registry's enum: a new method goes into its list in
+/// `laws/mod.rs` too.
 pub trait RollingLaw: Send + Sync {
     fn torques(
         &self,
@@ -90,6 +105,9 @@ pub trait RollingLaw: Send + Sync {
 
 /// Slot 5: an additive effect: a normal force (N, positive repulsive), possibly acting
 /// across a gap, and/or torques on the two particles.
+///
+/// Every method is forwarded by the registry's enum: a new method goes into its list in
+/// `laws/mod.rs` too.
 pub trait ExtraLaw: Send + Sync {
     fn force(&self, c: &Contact, history: &mut [f64]) -> f64;
     /// Torques on i and on j (N m), given the normal law's output and the Coulomb load (N).
@@ -156,6 +174,9 @@ impl BondState {
 /// ([`crate::sim::Simulation::form_bonds`]) and acting on top of the contact laws, also
 /// across a gap, until it breaks. The pipeline owns the bond's status (none, intact,
 /// broken) and its breaking time; the law keeps its loads in its history.
+///
+/// Every method is forwarded by the registry's enum: a new method goes into its list in
+/// `laws/mod.rs` too.
 pub trait BondLaw: Send + Sync {
     /// Pairs whose centres are closer than `contact_ratio * (r_i + r_j)` bond when bonds are
     /// formed.
@@ -200,14 +221,15 @@ impl Slot {
     }
 }
 
-/// A constructed law for one material pair.
+/// A constructed law for one material pair. A law's `build` wraps itself with `.into()`:
+/// `BuiltLaw::Normal(Hertz { .. }.into())`.
 pub enum BuiltLaw {
-    Normal(Box<dyn NormalLaw>),
-    Damping(Box<dyn DampingLaw>),
-    Tangential(Box<dyn TangentialLaw>),
-    Rolling(Box<dyn RollingLaw>),
-    Extra(Box<dyn ExtraLaw>),
-    Bond(Box<dyn BondLaw>),
+    Normal(AnyNormal),
+    Damping(AnyDamping),
+    Tangential(AnyTangential),
+    Rolling(AnyRolling),
+    Extra(AnyExtra),
+    Bond(AnyBond),
 }
 
 /// What a law's constructor gets: the two materials, their effective moduli and the

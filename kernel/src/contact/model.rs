@@ -3,8 +3,9 @@
 
 use super::laws::REGISTRY;
 use super::{
-    BondLaw, BondLoads, BuiltLaw, Contact, DampingLaw, ExtraLaw, LawEntry, LawInput, NormalLaw,
-    RollingLaw, Slot, TangentialLaw,
+    AnyBond, AnyDamping, AnyExtra, AnyNormal, AnyRolling, AnyTangential, BondLaw, BondLoads,
+    BuiltLaw, Contact, DampingLaw, ExtraLaw, LawEntry, LawInput, NormalLaw, RollingLaw, Slot,
+    TangentialLaw,
 };
 use crate::error::{KernelError, Result};
 use crate::material::{Material, effective_shear, effective_youngs};
@@ -43,14 +44,15 @@ pub struct ContactOut {
     pub torque_j: DVec3,
 }
 
-/// The laws of one material pair.
+/// The laws of one material pair, each held by value in its slot's enum (no `dyn`: see
+/// `contact/dispatch.rs`).
 struct PairLaws {
-    normal: Box<dyn NormalLaw>,
-    damping: Option<Box<dyn DampingLaw>>,
-    tangential: Option<Box<dyn TangentialLaw>>,
-    rolling: Option<Box<dyn RollingLaw>>,
-    extras: Vec<Box<dyn ExtraLaw>>,
-    bond: Option<Box<dyn BondLaw>>,
+    normal: AnyNormal,
+    damping: Option<AnyDamping>,
+    tangential: Option<AnyTangential>,
+    rolling: Option<AnyRolling>,
+    extras: Vec<AnyExtra>,
+    bond: Option<AnyBond>,
 }
 
 /// Where each law's history lives inside a contact's history row. Slot 0 is the

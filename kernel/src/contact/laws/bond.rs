@@ -128,14 +128,14 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Bond(Box::new(Bond {
+    BuiltLaw::Bond(Bond {
         s_n: input.params.get(&NORMAL_STIFFNESS),
         s_t: input.params.get(&SHEAR_STIFFNESS),
         sigma_c: input.params.get(&CRITICAL_NORMAL_STRESS),
         tau_c: input.params.get(&CRITICAL_SHEAR_STRESS),
         radius_ratio: input.params.get(&BOND_RADIUS_RATIO),
         contact_ratio: input.params.get(&BOND_CONTACT_RATIO),
-    }))
+    }.into())
 }
 
 pub struct Bond {

@@ -58,11 +58,11 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Extra(Box::new(Capillary {
+    BuiltLaw::Extra(Capillary {
         volume: input.params.get(&BRIDGE_VOLUME),
         gamma: input.params.get(&SURFACE_TENSION),
         theta: input.params.get(&CONTACT_ANGLE).to_radians(),
-    }))
+    }.into())
 }
 
 /// Attractive bridge force (N, >= 0) for R* (m), gamma_lv (N/m), theta (rad), V (m^3), gap S (m).

@@ -83,7 +83,7 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Extra(Box::new(CapillaryMoisture {
+    BuiltLaw::Extra(CapillaryMoisture {
         moisture: input.params.get(&MOISTURE),
         share: input.params.get(&BRIDGE_SHARE),
         bridges: input.params.get(&BRIDGES_PER_GRAIN),
@@ -91,7 +91,7 @@ fn build(input: &LawInput) -> BuiltLaw {
         gamma: input.params.get(&SURFACE_TENSION),
         theta: input.params.get(&CONTACT_ANGLE).to_radians(),
         rho_max: input.material_i.density.max(input.material_j.density),
-    }))
+    }.into())
 }
 
 /// Bridge volume (m^3) between bodies of mass `m_i`, `m_j` (kg; a wall's is infinite and

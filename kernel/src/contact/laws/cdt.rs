@@ -41,7 +41,7 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Rolling(Box::new(Cdt { mu_r: input.params.get(&ROLLING_FRICTION) }))
+    BuiltLaw::Rolling(Cdt { mu_r: input.params.get(&ROLLING_FRICTION) }.into())
 }
 
 /// -mu_r L d omega/|omega|, N m.

@@ -23,7 +23,7 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Tangential(Box::new(CoulombViscous { g_eff: input.g_eff, mu: input.params.get(&FRICTION) }))
+    BuiltLaw::Tangential(CoulombViscous { g_eff: input.g_eff, mu: input.params.get(&FRICTION) }.into())
 }
 
 pub struct CoulombViscous {

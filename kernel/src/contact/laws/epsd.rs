@@ -37,10 +37,10 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Rolling(Box::new(Epsd {
+    BuiltLaw::Rolling(Epsd {
         mu_r: input.params.get(&ROLLING_FRICTION),
         eta_r: input.params.get(&ROLLING_DAMPING),
-    }))
+    }.into())
 }
 
 pub struct Epsd {

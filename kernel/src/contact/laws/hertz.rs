@@ -26,7 +26,7 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Normal(Box::new(Hertz { e_eff: input.e_eff }))
+    BuiltLaw::Normal(Hertz { e_eff: input.e_eff }.into())
 }
 
 /// F_n (N) for E* (Pa), R* (m), overlap delta (m).

@@ -52,7 +52,7 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Normal(Box::new(Jkr::new(input.e_eff, input.params.get(&SURFACE_ENERGY))))
+    BuiltLaw::Normal(Jkr::new(input.e_eff, input.params.get(&SURFACE_ENERGY)).into())
 }
 
 pub struct Jkr {

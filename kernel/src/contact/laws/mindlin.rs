@@ -43,7 +43,7 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Tangential(Box::new(Mindlin { g_eff: input.g_eff, mu: input.params.get(&FRICTION) }))
+    BuiltLaw::Tangential(Mindlin { g_eff: input.g_eff, mu: input.params.get(&FRICTION) }.into())
 }
 
 /// S_t = 8 G* a, N/m.

@@ -31,7 +31,7 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Tangential(Box::new(MindlinIncremental { g_eff: input.g_eff, mu: input.params.get(&FRICTION) }))
+    BuiltLaw::Tangential(MindlinIncremental { g_eff: input.g_eff, mu: input.params.get(&FRICTION) }.into())
 }
 
 pub struct MindlinIncremental {

@@ -1,32 +1,127 @@
-//! The law registry: one line per law. The file `NAME.rs` beside this one holds the law and
-//! its [`LawEntry`] named `ENTRY`; listing `NAME` below declares the module and registers it.
-//! See `kernel/ADDING_A_LAW.md`.
+//! The law registry: one line per law. The file `NAME.rs` beside this one holds the law, a
+//! type `Type`, and its [`LawEntry`] named `ENTRY`; the line `NAME: Type,` under the law's
+//! slot below declares the module, registers the entry and lets the pipeline call `Type`
+//! without `dyn` (see `contact/dispatch.rs`). See `kernel/ADDING_A_LAW.md`.
 
-use super::LawEntry;
+use super::{
+    BondLaw, BondLoads, Contact, ContactOut, DampingLaw, ExtraLaw, LawEntry, NormalForce,
+    NormalLaw, RollingLaw, TangentialLaw,
+};
+use glam::DVec3;
 
+/// `module: Type,` per law, grouped by slot. Each line declares the module, lists its
+/// `ENTRY` in [`REGISTRY`] and adds `Type` as a variant of its slot's enum.
 macro_rules! registry {
-    ($($law:ident),* $(,)?) => {
-        $(pub mod $law;)*
-        /// Every law the model builder knows, in no particular order.
-        pub static REGISTRY: &[&LawEntry] = &[$(&$law::ENTRY),*];
+    (
+        normal { $($n:ident: $nt:ident,)* }
+        damping { $($d:ident: $dt:ident,)* }
+        tangential { $($t:ident: $tt:ident,)* }
+        rolling { $($r:ident: $rt:ident,)* }
+        extra { $($x:ident: $xt:ident,)* }
+        bond { $($b:ident: $bt:ident,)* }
+    ) => {
+        $(pub mod $n;)* $(pub mod $d;)* $(pub mod $t;)* $(pub mod $r;)* $(pub mod $x;)* $(pub mod $b;)*
+
+        /// Every law the model builder knows, grouped by slot.
+        pub static REGISTRY: &[&LawEntry] = &[
+            $(&$n::ENTRY,)* $(&$d::ENTRY,)* $(&$t::ENTRY,)* $(&$r::ENTRY,)* $(&$x::ENTRY,)* $(&$b::ENTRY,)*
+        ];
+
+        // Each list below names every method of its trait (see `contact/dispatch.rs`).
+        law_enum!(
+            /// Any registered normal law.
+            AnyNormal: NormalLaw [$($nt($n::$nt))*] {
+                fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce;
+                fn reach(&self, r_eff: f64) -> f64;
+            }
+        );
+        law_enum!(
+            /// Any registered damping law.
+            AnyDamping: DampingLaw [$($dt($d::$dt))*] {
+                fn coefficient(&self, stiffness: f64, m_eff: f64) -> f64;
+            }
+        );
+        law_enum!(
+            /// Any registered tangential law.
+            AnyTangential: TangentialLaw [$($tt($t::$tt))*] {
+                fn stiffness(&self, c: &Contact, normal: &NormalForce) -> f64;
+                fn force(
+                    &self,
+                    c: &Contact,
+                    coulomb_load: f64,
+                    stiffness: f64,
+                    damping: f64,
+                    history: &mut [f64]
+                ) -> DVec3;
+            }
+        );
+        law_enum!(
+            /// Any registered rolling law.
+            AnyRolling: RollingLaw [$($rt($r::$rt))*] {
+                fn torques(
+                    &self,
+                    c: &Contact,
+                    normal: &NormalForce,
+                    coulomb_load: f64,
+                    history: &mut [f64]
+                ) -> (DVec3, DVec3);
+            }
+        );
+        law_enum!(
+            /// Any registered extra law.
+            AnyExtra: ExtraLaw [$($xt($x::$xt))*] {
+                fn force(&self, c: &Contact, history: &mut [f64]) -> f64;
+                fn torques(
+                    &self,
+                    c: &Contact,
+                    normal: &NormalForce,
+                    coulomb_load: f64,
+                    history: &mut [f64]
+                ) -> (DVec3, DVec3);
+                fn reach(&self, r_eff: f64) -> f64;
+                fn reach_between(&self, c: &Contact) -> f64;
+            }
+        );
+        law_enum!(
+            /// Any registered bond law.
+            AnyBond: BondLaw [$($bt($b::$bt))*] {
+                fn contact_ratio(&self) -> f64;
+                fn reach(&self, r_max: f64) -> f64;
+                fn force(&self, c: &Contact, history: &mut [f64]) -> Option<ContactOut>;
+                fn loads(&self, history: &[f64]) -> BondLoads;
+                fn time_scale(&self, mass: f64, r_i: f64, r_j: f64) -> f64;
+            }
+        );
     };
 }
 
 registry! {
-    hertz,
-    jkr,
-    restitution,
-    mindlin,
-    mindlin_incremental,
-    coulomb_viscous,
-    cdt,
-    epsd,
-    capillary,
-    capillary_moisture,
-    twisting,
-    plastic_adhesion,
-    sjkr,
-    bond,
+    normal {
+        hertz: Hertz,
+        jkr: Jkr,
+    }
+    damping {
+        restitution: Restitution,
+    }
+    tangential {
+        mindlin: Mindlin,
+        mindlin_incremental: MindlinIncremental,
+        coulomb_viscous: CoulombViscous,
+    }
+    rolling {
+        cdt: Cdt,
+        epsd: Epsd,
+    }
+    extra {
+        capillary: Capillary,
+        capillary_moisture: CapillaryMoisture,
+        twisting: Twisting,
+        plastic_adhesion: PlasticAdhesion,
+        sjkr: Sjkr,
+    }
+    bond {
+        bond: Bond,
+    }
 }
 
 #[cfg(test)]

@@ -40,10 +40,10 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Extra(Box::new(PlasticAdhesion {
+    BuiltLaw::Extra(PlasticAdhesion {
         e_eff: input.e_eff,
         lambda: input.params.get(&PLASTIC_ADHESION),
-    }))
+    }.into())
 }
 
 pub struct PlasticAdhesion {

@@ -38,7 +38,7 @@ pub const ENTRY: LawEntry = LawEntry {
 
 fn build(input: &LawInput) -> BuiltLaw {
     let b = beta(input.params.get(&RESTITUTION));
-    BuiltLaw::Damping(Box::new(Restitution { factor: -2.0 * (5.0f64 / 6.0).sqrt() * b }))
+    BuiltLaw::Damping(Restitution { factor: -2.0 * (5.0f64 / 6.0).sqrt() * b }.into())
 }
 
 /// beta = ln(e) / sqrt(ln(e)^2 + pi^2) (dimensionless, <= 0).

@@ -71,9 +71,9 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Extra(Box::new(Sjkr {
+    BuiltLaw::Extra(Sjkr {
         k: input.params.get(&COHESION_ENERGY_DENSITY),
-    }))
+    }.into())
 }
 
 /// Area (m^2) of the circle where two undeformed spheres of radii `r_i`, `r_j` (m; `r_j`

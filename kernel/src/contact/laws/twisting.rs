@@ -51,11 +51,11 @@ pub const ENTRY: LawEntry = LawEntry {
 };
 
 fn build(input: &LawInput) -> BuiltLaw {
-    BuiltLaw::Extra(Box::new(Twisting {
+    BuiltLaw::Extra(Twisting {
         g_eff: input.g_eff,
         mu_tw: input.params.get(&TWISTING_FRICTION),
         eta_tw: input.params.get(&TWISTING_DAMPING),
-    }))
+    }.into())
 }
 
 /// k_tw = 4 G* a^3, N m/rad.
