@@ -5,7 +5,7 @@
 # candidates, exactly as tools/discovery/hidden_effect.sh does (same conditions, replicates,
 # noise and free parameter; no fit). Prints one line per seed and the count ranked first and
 # significant. The model's own runs are cached in OUT/cache, so each seed after the first
-# costs the truth's runs only (about 15 s at the coarse preset on two cores).
+# costs the truth's runs only (15-60 s a seed at the coarse preset on two cores).
 #
 #   tools/discovery/detection_rate.sh EFFECT STRENGTH OUT SEED...
 #   tools/discovery/detection_rate.sh plastic_adhesion 0.04 runs/rate $(seq 3 18)
