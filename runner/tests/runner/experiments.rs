@@ -273,58 +273,6 @@ fn a_funnel_stopped_before_rest_says_why() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The kept case of a heap whose angle flips for ever (docs/rockers/rocker.toml: one grain
-/// rocks on the apex, docs/li2022-compare.md "Grains that never stop"). Before the still
-/// path it ran to `max_time` (8 s) in the study; now it is at rest once the soil below the
-/// outlet has averaged under a fifth of `rest_speed` for `rest_time`.
-#[test]
-fn a_heap_whose_angle_flips_comes_to_rest_when_the_soil_is_still() {
-    let e = rocker(None);
-    assert_eq!(e["settled"], true, "{e}");
-    let at = e["settled_at_s"].as_f64().unwrap();
-    assert!(at < 1.0, "{e}");
-    assert!(e["warning"].is_null(), "{e}");
-}
-
-/// Stopped by `max_time` after the soil below the outlet is at rest on average, but before
-/// it has been still for `rest_time`, the same run's warning names the flipping angle and
-/// the grains that still move, not more time.
-#[test]
-fn a_heap_whose_angle_flips_is_told_apart_from_one_still_moving() {
-    let e = rocker(Some(0.66));
-    assert_eq!(e["settled"], false, "{e}");
-    let warning = e["warning"].as_str().unwrap();
-    assert!(
-        warning.contains("the soil below the outlet is at rest on average")
-            && warning.contains("grain(s) faster than 0.05 m/s")
-            && !warning.contains("raise repose.max_time"),
-        "{warning}"
-    );
-}
-
-/// Runs docs/rockers/rocker.toml, with `max_time` changed if given; its experiment summary.
-fn rocker(max_time: Option<f64>) -> serde_json::Value {
-    let kept = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/rockers");
-    let tag = max_time.map_or("kept".to_string(), |t| t.to_string());
-    let dir = std::env::temp_dir().join(format!("tilth-rocker-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = std::fs::read_to_string(kept.join("rocker.toml")).unwrap();
-    assert!(text.contains("max_time = 1.0\n") && text.contains("model = \"truth-"));
-    let text = text.replace(
-        "model = \"truth-",
-        &format!("model = \"{}/truth-", kept.display()),
-    );
-    let text = match max_time {
-        Some(t) => text.replace("max_time = 1.0\n", &format!("max_time = {t}\n")),
-        None => text,
-    };
-    let file = dir.join("rocker.toml");
-    std::fs::write(&file, text).unwrap();
-    let e = experiment_summary(&file, &dir.join("out"));
-    let _ = std::fs::remove_dir_all(&dir);
-    e
-}
-
 /// `tilth run --json FILE --out OUT`, which must succeed: the experiment's part of its summary.
 fn experiment_summary(file: &Path, out: &Path) -> serde_json::Value {
     let r = tilth()
