@@ -684,7 +684,13 @@ mod tests {
                 }
             }
         }
-        p.push(DVec3::Z * (R + 2.0 * R * LAYERS as f64), DVec3::ZERO, R, 1500.0, 0);
+        p.push(
+            DVec3::Z * (R + 2.0 * R * LAYERS as f64),
+            DVec3::ZERO,
+            R,
+            1500.0,
+            0,
+        );
         p
     }
 
@@ -805,7 +811,10 @@ mod tests {
     fn a_still_heap_is_at_rest_a_rest_time_after_the_pour() {
         let (e, _) = judge(0.01, 0.0, false, 8.0);
         let at = e["settled_at_s"].as_f64().unwrap();
-        assert!((at - (STILL_FROM + rest_time())).abs() <= 0.02 + 1e-9, "{e}");
+        assert!(
+            (at - (STILL_FROM + rest_time())).abs() <= 0.02 + 1e-9,
+            "{e}"
+        );
         let top = 2.0 * R * (LAYERS + 1) as f64;
         let a = e["heap_cone_angle_deg"].as_f64().unwrap();
         assert!((a - angle(top)).abs() < 1e-9, "{e}");

@@ -1,31 +1,42 @@
 //! The discovery loop proven on synthetic data at the coarse preset (docs/discovery.md, "The
 //! proof"), through the scripts a user runs:
 //!
-//! - three different hidden effects, each in the truth and absent from the model: `diagnose`
-//!   ranks the hidden one first with a corrected p below 0.01, and after `fit` (the model's
-//!   free parameter and that candidate's strength) the RMSE of every reading is within 1.5x
-//!   the data's noise (the RMS of its `uncertainty`: the injected noise and the scatter of
-//!   the truth's mean), or within 1.5x what the truth itself leaves on the same data, with
-//!   the same seeds, where that is more: a draw of the noise that no model can follow (the
+//! - three different hidden effects, each in the truth and absent from the model, each drawn
+//!   DRAWS times (synth seeds `seed..seed + DRAWS`): `diagnose` ranks the hidden one first
+//!   with a corrected p below 0.01 on at least half of the draws. One draw is not enough:
+//!   the data are one realisation of the noise and of the grains' chaos, and hidden plastic
+//!   adhesion comes out first on about 3 draws in 4 (docs/discovery.md, "How often a hidden
+//!   effect is ranked first": 12 of 16), so a one-draw test fails on any change of the
+//!   kernel's rounding about one time in four. At that rate "at least 4 of 8" holds with
+//!   probability 0.97 (binomial); a diagnosis that named the effect only as often as the
+//!   null study's false alarms (1 in 20) would pass it with probability 4e-4;
+//! - on the first draw where it is ranked first, after `fit` (the model's free parameter
+//!   and that candidate's strength) the RMSE of every reading is within 1.5x the data's
+//!   noise (the RMS of its `uncertainty`: the injected noise and the scatter of the truth's
+//!   mean), or within 1.5x what the truth itself leaves on the same data, with the same
+//!   seeds, where that is more: a draw of the noise that no model can follow (the
 //!   wall-adhesion study's residues at the dry levels, docs/discovery.md, "The stop rule and
 //!   the seeds") is the data's miss, not the loop's;
 //! - data the model itself made (no hidden effect), 20 seeds: in at least 19 no candidate is
 //!   significant.
 //!
-//! Both share one run cache, so the model's own runs (compare, the diagnosis's finite
-//! differences) are made once. About 30 minutes on 2 cores.
+//! All share one run cache, so the model's own runs (compare, the diagnosis's finite
+//! differences) are made once. About 45 minutes on 2 cores.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::{Mutex, OnceLock};
 
 /// The effects hidden, their strengths (not the candidates' finite-difference steps) and
-/// the synth seeds.
+/// their first synth seeds.
 const HIDDEN: [(&str, f64, u64); 3] = [
     ("fines", 0.15, 1),
     ("wall_adhesion", 0.02, 2),
     ("plastic_adhesion", 0.04, 3),
 ];
+
+/// Draws of the data per hidden effect.
+const DRAWS: u64 = 8;
 
 /// One study at a time: they share the cache, and each uses both cores.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -82,27 +93,53 @@ fn json(path: &Path) -> serde_json::Value {
 fn hidden_effects_are_ranked_first_and_fitting_them_brings_the_error_to_the_noise() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let mut failures = vec![];
-    for (effect, strength, seed) in HIDDEN {
+    for (effect, strength, first_seed) in HIDDEN {
+        let seeds: Vec<String> = (first_seed..first_seed + DRAWS)
+            .map(|s| s.to_string())
+            .collect();
+        let rate = scratch().join(format!("rate-{effect}"));
+        let _ = std::fs::remove_dir_all(&rate);
+        let mut args = vec![effect.to_string(), strength.to_string()];
+        args.push(rate.to_str().unwrap().to_string());
+        args.extend(seeds.iter().cloned());
+        script(
+            "detection_rate.sh",
+            &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        // The draws where the hidden effect is first with p < 0.01, and what came first on
+        // the others.
+        let mut hits = vec![];
+        let mut misses = vec![];
+        for seed in &seeds {
+            let d = json(&rate.join(format!("seed{seed}/2-diagnose/diagnosis.json")));
+            let first = &d["candidates"][0];
+            let p = first["p_value"].as_f64().unwrap();
+            if first["name"] == effect && first["significant"] == true && p < 0.01 {
+                hits.push(seed.clone());
+            } else {
+                misses.push(format!("seed {seed}: {} (p = {p})", first["name"]));
+            }
+        }
+        if 2 * hits.len() < seeds.len() {
+            failures.push(format!(
+                "{effect} hidden at {strength}: ranked first with p < 0.01 in {} of {} draws; first instead: {}",
+                hits.len(),
+                seeds.len(),
+                misses.join(", ")
+            ));
+        }
+        eprintln!(
+            "{effect} hidden at {strength}: ranked first with p < 0.01 in {} of {} draws",
+            hits.len(),
+            seeds.len()
+        );
+        let Some(seed) = hits.first() else { continue };
         let out = scratch().join(format!("hidden-{effect}"));
         let _ = std::fs::remove_dir_all(&out);
         script(
             "hidden_effect.sh",
-            &[
-                effect,
-                &strength.to_string(),
-                out.to_str().unwrap(),
-                &seed.to_string(),
-            ],
+            &[effect, &strength.to_string(), out.to_str().unwrap(), seed],
         );
-        let d = json(&out.join("2-diagnose/diagnosis.json"));
-        let first = &d["candidates"][0];
-        let p = first["p_value"].as_f64().unwrap();
-        if first["name"] != effect || first["significant"] != true || !(p < 0.01) {
-            failures.push(format!(
-                "{effect} hidden at {strength}: diagnose ranked first {} (p = {p}, significant: {})",
-                first["name"], first["significant"]
-            ));
-        }
         // The noise of each reading: the RMS of the data's uncertainties.
         let rows = json(&out.join("1-compare/compare.json"));
         let after = json(&out.join("4-compare/compare.json"));
