@@ -8,31 +8,38 @@
 //! 3. rebuild the pair list and wall contact list when something moved more than skin/2
 //!    (history is carried over);
 //! 4. pair phase: every listed pair's force and torques (contact laws, then the bond if
-//!    intact), written to the pair's own slot;
-//! 5. particle phase: each particle sums its pairs' outputs, its wall contacts and gravity in
-//!    a fixed order;
+//!    intact), added to both particles' partial sums in its block of the pair list
+//!    ([`PairSchedule`]);
+//! 5. particle phase: each particle adds gravity, its share of the blocks' partial sums (in
+//!    block order) and its wall contacts;
 //! 6. second half kick, applied in the particle phase as each force is known, with the
 //!    failure checks (non-finite state, runaway speed, escape).
 //!
 //! The wall-clock time of each part is summed in [`Simulation::times`].
 //!
 //! Every sum runs in an order that does not depend on the thread count, so 1 and 2 threads
-//! give the same bits (work is split in fixed chunks of [`CHUNK`] rows).
+//! give the same bits (work is split in fixed chunks of [`CHUNK`] rows, and the pair phase
+//! in blocks set by the pair list and its contacts).
 
-use crate::contact::{BondState, BondStatus, Contact, ContactModel, ContactOut};
+use crate::contact::{BondState, BondStatus, ContactModel};
 use crate::error::{KernelError, Result};
 use crate::factory::Factory;
-use crate::neighbor::{CHUNK, PairList, WallContacts, build_wall_contacts, chunks_per_task};
+use crate::neighbor::schedule::Block;
+use crate::neighbor::{
+    CHUNK, PairList, PairSchedule, WallContacts, build_wall_contacts, chunks_per_task,
+};
 use crate::particles::Particles;
 use crate::step_check::{PackingFrequency, loaded_step_warning, packing_frequency};
 use crate::timestep::{BOND_WARN_FRACTION, WARN_FRACTION, rayleigh_time};
 use crate::timing::{Laps, PhaseTimes};
 use crate::wall::{Hit, Wall};
 use glam::DVec3;
+use pair_forces::{PartialSums, add_pair_forces};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use wall_forces::{Body, WallList, WallRows, add_wall_forces};
 
+mod pair_forces;
 mod wall_forces;
 
 /// Steps between spatial reorderings of the particles (cell order, for cache locality; as
@@ -101,7 +108,11 @@ pub struct Simulation {
     /// skin + the laws' reach: the list distance beyond touching.
     extra: f64,
     pairs: PairList,
-    pair_out: Vec<ContactOut>,
+    /// How the pair phase splits its sums, made from `pairs` at each rebuild.
+    schedule: PairSchedule,
+    pair_sums: PartialSums,
+    /// Listed pairs that carried force in the last evaluation.
+    pairs_carrying: usize,
     walls_near: WallContacts,
     ref_position: Vec<DVec3>,
     /// Each particle's half-step kick factors (dt/2 / m, dt/2 / I), computed by the same
@@ -304,7 +315,9 @@ impl Simulation {
             skin,
             extra,
             pairs: PairList::empty(stride),
-            pair_out: vec![],
+            schedule: PairSchedule::default(),
+            pair_sums: PartialSums::default(),
+            pairs_carrying: 0,
             walls_near: WallContacts::empty(),
             ref_position: vec![],
             kick_factor: vec![],
@@ -506,8 +519,12 @@ impl Simulation {
             build_wall_contacts(p, walls, old, extra, stride, order.as_deref())
         });
         self.walls_near = new_walls;
-        self.pair_out
-            .resize(self.pairs.len(), ContactOut::default());
+        self.schedule = PairSchedule::build(
+            &self.pairs.row_start,
+            &self.pairs.j,
+            &self.pairs.history,
+            self.pairs.stride,
+        );
         self.ref_position.clone_from(&self.particles.position);
         for (r, w) in self.wall_ref_offset.iter_mut().zip(&self.walls) {
             *r = w.offset;
@@ -574,35 +591,26 @@ impl Simulation {
         let mut laps = Laps::start();
         let dt = self.dt;
         let time = self.time;
-        let p = &self.particles;
-        let model = &self.model;
-        let pairs = &mut self.pairs;
-        let stride = pairs.stride;
-        let (pi, pj) = (&pairs.i, &pairs.j);
-        let out = &mut self.pair_out;
-        self.pool.install(|| {
-            out.par_chunks_mut(CHUNK)
-                .zip(pairs.history.par_chunks_mut(CHUNK * stride))
-                .enumerate()
-                .with_max_len(chunks_per_task())
-                .for_each(|(c, (out, hist))| {
-                    let base = c * CHUNK;
-                    for (k, o) in out.iter_mut().enumerate() {
-                        let (i, j) = (pi[base + k] as usize, pj[base + k] as usize);
-                        let h = &mut hist[k * stride..(k + 1) * stride];
-                        *o = pair_force(p, model, i, j, h, dt, time).unwrap_or_default();
-                    }
-                });
-        });
-
+        let (p, model, pairs, schedule) = (
+            &self.particles,
+            &self.model,
+            &mut self.pairs,
+            &self.schedule,
+        );
+        let sums = &mut self.pair_sums;
+        self.pairs_carrying = self
+            .pool
+            .install(|| add_pair_forces(p, model, pairs, schedule, sums, (dt, time)));
         self.times.pair += laps.lap();
 
-        // Particle phase: each particle's own sum, in a fixed order.
+        // Particle phase: each particle's sum (gravity, its share of each block's partial
+        // sums in block order, its walls), then the second half kick and the checks.
         let gravity = self.gravity;
+        let (schedule, sums) = (&self.schedule, &self.pair_sums);
+        let model = &self.model;
+        let stride = self.pairs.stride;
         let walls = &self.walls;
         let wc = &mut self.walls_near;
-        let pairs = &self.pairs;
-        let out = &self.pair_out;
         let p = &mut self.particles;
         let n = p.len();
         // Split the wall-contact arrays at the chunk boundaries so each task owns its rows.
@@ -652,23 +660,20 @@ impl Simulation {
                 .with_max_len(chunks_per_task())
                 .map(|(c, ((((fs, ts), vs), ws), mut mine))| {
                     let mut hits: Vec<(f64, usize, Hit)> = vec![];
+                    let rows = c * CHUNK..c * CHUNK + fs.len();
+                    let near: Vec<&Block> = schedule.blocks_touching(rows).collect();
                     // Whether every kicked particle of the chunk passed the cheap test.
                     let mut plausible_all = true;
                     for k in 0..fs.len() {
                         let i = c * CHUNK + k;
                         let mut f = gravity * mass[i];
                         let mut t = DVec3::ZERO;
-                        for o in &out[pairs.row_start[i] as usize..pairs.row_start[i + 1] as usize]
-                        {
-                            f += o.force;
-                            t += o.torque_i;
-                        }
-                        for &kk in &pairs.rev_pair
-                            [pairs.rev_start[i] as usize..pairs.rev_start[i + 1] as usize]
-                        {
-                            let o = &out[kk as usize];
-                            f -= o.force;
-                            t += o.torque_j;
+                        for b in &near {
+                            if b.touch.contains(&i) {
+                                let at = b.offset + i - b.touch.start;
+                                f += sums.force[at];
+                                t += sums.torque[at];
+                            }
                         }
                         let (e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
                         if e < end {
@@ -955,11 +960,7 @@ impl Simulation {
 
     /// Contacts that currently carry force (pairs, then walls).
     pub fn contact_counts(&self) -> (usize, usize) {
-        let pairs = self
-            .pair_out
-            .iter()
-            .filter(|o| o.force != DVec3::ZERO)
-            .count();
+        let pairs = self.pairs_carrying;
         let walls = self
             .walls_near
             .force
@@ -973,9 +974,9 @@ impl Simulation {
     pub fn heap_bytes(&self) -> usize {
         self.particles.heap_bytes()
             + self.pairs.heap_bytes()
-            + self.pair_out.capacity() * std::mem::size_of::<ContactOut>()
             + self.ref_position.capacity() * 24
             + self.kick_factor.capacity() * 16
+            + (self.pair_sums.force.capacity() + self.pair_sums.torque.capacity()) * 24
             + self.walls_near.heap_bytes()
             // A B-tree entry (two ids and a time) with its share of the node, roughly.
             + self.retired_bonds.len() * 24
@@ -1091,32 +1092,6 @@ enum Failure {
     NonFinite,
     Runaway,
     Escaped,
-}
-
-/// The force of listed pair (i, j), or `None` when they do not interact. `time` stamps a
-/// bond that breaks.
-#[inline]
-fn pair_force(
-    p: &Particles,
-    model: &ContactModel,
-    i: usize,
-    j: usize,
-    h: &mut [f64],
-    dt: f64,
-    time: f64,
-) -> Option<ContactOut> {
-    let d = p.position[j] - p.position[i];
-    let dist2 = d.length_squared();
-    let rsum = p.radius[i] + p.radius[j];
-    if h[crate::contact::model::ACTIVE] == 0.0 && dist2 >= rsum * rsum && !model.bond_intact(h) {
-        return None;
-    }
-    let dist = dist2.sqrt();
-    if dist == 0.0 {
-        return None;
-    }
-    let c = Contact::between_particles(p, i, j, d, dist, dt);
-    model.evaluate_pair(p.material[i] as usize, p.material[j] as usize, &c, time, h)
 }
 
 #[cfg(test)]

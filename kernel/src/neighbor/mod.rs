@@ -3,10 +3,12 @@
 
 pub mod cells;
 pub mod pairs;
+pub mod schedule;
 pub(crate) mod wall_list;
 
 pub use cells::CellGrid;
 pub use pairs::PairList;
+pub use schedule::PairSchedule;
 pub(crate) use wall_list::{WallContacts, build_wall_contacts};
 
 /// Rows (particles, or pairs in the pair phase) handled by one parallel task. Fixed, so the

@@ -16,9 +16,6 @@ pub struct PairList {
     pub row_start: Vec<u32>,
     pub history: Vec<f64>,
     pub stride: usize,
-    /// Pairs of particle p as second member: `rev_pair[rev_start[p]..rev_start[p + 1]]`, ascending.
-    pub rev_start: Vec<u32>,
-    pub rev_pair: Vec<u32>,
     /// The buffers of the list before this one, refilled by the next rebuild: two lists'
     /// worth of memory at most, and no new allocation (or heap fragmentation) once the
     /// count of pairs stops growing.
@@ -32,8 +29,6 @@ struct Buffers {
     j: Vec<u32>,
     row_start: Vec<u32>,
     history: Vec<f64>,
-    rev_start: Vec<u32>,
-    rev_pair: Vec<u32>,
 }
 
 /// One task's rows of a new list: partner counts per row and the partners, row after row.
@@ -47,7 +42,6 @@ impl PairList {
         PairList {
             stride,
             row_start: vec![0],
-            rev_start: vec![0],
             ..Default::default()
         }
     }
@@ -161,16 +155,12 @@ impl PairList {
         room(&mut b.j, total);
         room(&mut b.row_start, n + 1);
         zeroed(&mut b.history, total * stride);
-        zeroed(&mut b.rev_start, n + 1);
-        zeroed(&mut b.rev_pair, total);
         let mut list = PairList {
             i: b.i,
             j: b.j,
             row_start: b.row_start,
             history: b.history,
             stride,
-            rev_start: b.rev_start,
-            rev_pair: b.rev_pair,
             spare: Buffers::default(),
         };
         list.row_start.push(0);
@@ -227,25 +217,12 @@ impl PairList {
                 }
             });
 
-        for &j in &list.j {
-            list.rev_start[j as usize + 1] += 1;
-        }
-        for p in 0..n {
-            list.rev_start[p + 1] += list.rev_start[p];
-        }
-        let mut fill = list.rev_start.clone();
-        for (k, &j) in list.j.iter().enumerate() {
-            list.rev_pair[fill[j as usize] as usize] = k as u32;
-            fill[j as usize] += 1;
-        }
         let old = std::mem::replace(self, list);
         self.spare = Buffers {
             i: old.i,
             j: old.j,
             row_start: old.row_start,
             history: old.history,
-            rev_start: old.rev_start,
-            rev_pair: old.rev_pair,
         };
     }
 
@@ -261,19 +238,13 @@ impl PairList {
 
     /// Bytes of heap memory held.
     pub fn heap_bytes(&self) -> usize {
-        let index = [
-            &self.i,
-            &self.j,
-            &self.row_start,
-            &self.rev_start,
-            &self.rev_pair,
-        ];
+        let index = [&self.i, &self.j, &self.row_start];
         capacity_bytes(index, &self.history) + self.spare.heap_bytes()
     }
 }
 
 /// Heap bytes of a list's index vectors and history.
-fn capacity_bytes(index: [&Vec<u32>; 5], history: &Vec<f64>) -> usize {
+fn capacity_bytes(index: [&Vec<u32>; 3], history: &Vec<f64>) -> usize {
     4 * index.iter().map(|v| v.capacity()).sum::<usize>() + 8 * history.capacity()
 }
 
@@ -289,20 +260,14 @@ fn room<T>(v: &mut Vec<T>, len: usize) {
 }
 
 /// [`room`], then `len` zeros.
-fn zeroed<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
+pub(crate) fn zeroed<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
     room(v, len);
     v.resize(len, T::default());
 }
 
 impl Buffers {
     fn heap_bytes(&self) -> usize {
-        let index = [
-            &self.i,
-            &self.j,
-            &self.row_start,
-            &self.rev_start,
-            &self.rev_pair,
-        ];
+        let index = [&self.i, &self.j, &self.row_start];
         capacity_bytes(index, &self.history)
     }
 }
