@@ -13,7 +13,9 @@
 //! 5. particle phase: each particle adds gravity, its share of the blocks' partial sums (in
 //!    block order) and its wall contacts;
 //! 6. second half kick, applied in the particle phase as each force is known, with the
-//!    failure checks (non-finite state, runaway speed, escape).
+//!    failure checks (non-finite state, runaway speed, escape); within [`Simulation::run`],
+//!    also the next step's step 1 for each chunk that passed them, while its particles are
+//!    in cache (the same operations, so the same bits).
 //!
 //! The wall-clock time of each part is summed in [`Simulation::times`].
 //!
@@ -331,7 +333,7 @@ impl Simulation {
         sim.check_overlaps()?;
         sim.insert_particles();
         sim.rebuild();
-        sim.compute_forces(false, true);
+        sim.compute_forces(false, true, false);
         Ok(sim)
     }
 
@@ -356,13 +358,19 @@ impl Simulation {
         Ok(())
     }
 
-    /// Advances `n` steps, stopping at the first failure.
+    /// Advances `n` steps, stopping at the first failure. Within the run each step's
+    /// particle phase also applies the next step's first half kick and drift to each
+    /// particle as soon as its second half kick is done (one pass over memory instead of
+    /// two, with the same operations in the same order, so the same bits as `n` calls of
+    /// [`Simulation::advance`]); the last step does not, so the state between runs is the
+    /// ordinary end-of-step state.
     pub fn run(&mut self, n: u64) -> Result<()> {
         // Enter the pool once: every parallel phase below then runs without a hand-off.
         let pool = std::sync::Arc::clone(&self.pool);
         pool.install(|| {
-            for _ in 0..n {
-                self.advance()?;
+            let mut drifted = None;
+            for s in 0..n {
+                drifted = self.step(drifted, s + 1 < n)?;
             }
             Ok(())
         })
@@ -375,6 +383,14 @@ impl Simulation {
 
     /// One velocity-Verlet step.
     pub fn advance(&mut self) -> Result<()> {
+        self.step(None, false).map(|_| ())
+    }
+
+    /// One velocity-Verlet step. `drifted`: the first half kick and drift were already
+    /// applied by the previous step's particle phase, which found these displacement and
+    /// position results. With `drift_next`, this step's particle phase applies the next
+    /// step's, and returns its results.
+    fn step(&mut self, drifted: Option<Drift>, drift_next: bool) -> Result<Option<Drift>> {
         let mut laps = Laps::start();
         let dt = self.dt;
         if self.kick_factor.len() != self.particles.len() {
@@ -384,39 +400,40 @@ impl Simulation {
         let dom = self.domain;
         // The positions change here only, so they are checked here, while in registers (the
         // particle phase then tests only what its kick changes).
-        let (max_disp2, mut positions_ok) = self.pool.install(|| {
-            let p = &mut self.particles;
-            p.position
-                .par_chunks_mut(CHUNK)
-                .zip(p.velocity.par_chunks_mut(CHUNK))
-                .zip(p.angular_velocity.par_chunks_mut(CHUNK))
-                .zip(p.force.par_chunks(CHUNK))
-                .zip(p.torque.par_chunks(CHUNK))
-                .zip(kick_factor.par_chunks(CHUNK))
-                .zip(self.ref_position.par_chunks(CHUNK))
-                .with_max_len(chunks_per_task())
-                .map(|((((((x, v), w), f), t), kf), x0)| {
-                    let mut worst: f64 = 0.0;
-                    // The chunk's bounding box, and a sum that is zero only if every
-                    // coordinate is finite (x * 0 is NaN for an infinite or NaN x).
-                    let (mut lo, mut hi, mut zero) = (x[0], x[0], DVec3::ZERO);
-                    for k in 0..x.len() {
-                        let (kv, kw) = kf[k];
-                        v[k] += f[k] * kv;
-                        w[k] += t[k] * kw;
-                        x[k] += v[k] * dt;
-                        worst = worst.max((x[k] - x0[k]).length_squared());
-                        lo = lo.min(x[k]);
-                        hi = hi.max(x[k]);
-                        zero += x[k] * 0.0;
-                    }
-                    let ok = zero == DVec3::ZERO
-                        && plausible_position(lo, dom)
-                        && plausible_position(hi, dom);
-                    (worst, ok)
-                })
-                .reduce(|| (0.0, true), |a, b| (a.0.max(b.0), a.1 & b.1))
-        });
+        let Drift {
+            max_disp2,
+            mut positions_ok,
+        } = match drifted {
+            Some(d) => d,
+            None => self.pool.install(|| {
+                let p = &mut self.particles;
+                p.position
+                    .par_chunks_mut(CHUNK)
+                    .zip(p.velocity.par_chunks_mut(CHUNK))
+                    .zip(p.angular_velocity.par_chunks_mut(CHUNK))
+                    .zip(p.force.par_chunks(CHUNK))
+                    .zip(p.torque.par_chunks(CHUNK))
+                    .zip(kick_factor.par_chunks(CHUNK))
+                    .zip(self.ref_position.par_chunks(CHUNK))
+                    .with_max_len(chunks_per_task())
+                    .map(|((((((x, v), w), f), t), kf), x0)| {
+                        kick_and_drift(
+                            ChunkMotion {
+                                x,
+                                v,
+                                w,
+                                f,
+                                t,
+                                kf,
+                                x0,
+                            },
+                            dt,
+                            dom,
+                        )
+                    })
+                    .reduce(Drift::none, Drift::join)
+            }),
+        };
         let mut wall_disp: f64 = 0.0;
         for (w, r0) in self.walls.iter_mut().zip(&self.wall_ref_offset) {
             w.update_velocity();
@@ -448,9 +465,9 @@ impl Simulation {
             self.check_loaded_step();
         }
         self.times.neighbor += laps.lap();
-        match self.compute_forces(true, positions_ok) {
-            None => Ok(()),
-            Some((i, kind)) => Err(self.failure(i, kind)),
+        match self.compute_forces(true, positions_ok, drift_next) {
+            (None, next) => Ok(next),
+            (Some((i, kind)), _) => Err(self.failure(i, kind)),
         }
     }
 
@@ -586,8 +603,15 @@ impl Simulation {
     /// to each particle as soon as its force is known (one pass over memory instead of two)
     /// and returns the first particle in a failed state. `positions_ok`: whether every
     /// position passed [`plausible_position`] since it last changed; when not, every
-    /// particle gets the exact test.
-    fn compute_forces(&mut self, kick: bool, positions_ok: bool) -> Option<(usize, Failure)> {
+    /// particle gets the exact test. With `drift_next` (and `kick`), a particle phase that
+    /// finds no failure also applies the next step's first half kick and drift, and
+    /// returns its results (see [`Simulation::run`]).
+    fn compute_forces(
+        &mut self,
+        kick: bool,
+        positions_ok: bool,
+        drift_next: bool,
+    ) -> (Option<(usize, Failure)>, Option<Drift>) {
         let mut laps = Laps::start();
         let dt = self.dt;
         let time = self.time;
@@ -642,23 +666,25 @@ impl Simulation {
             wall: &wc.wall,
             feature: &wc.feature,
         };
-        let (pos, radius, mass, inertia, material) =
-            (&p.position, &p.radius, &p.mass, &p.inertia, &p.material);
+        let (radius, mass, inertia, material) = (&p.radius, &p.mass, &p.inertia, &p.material);
         let limit2 = self.speed_limit * self.speed_limit;
         let dom = self.domain;
         // `advance` refreshed them for this step's particles.
         debug_assert!(!kick || self.kick_factor.len() == n);
         let kick_factor = &self.kick_factor;
-        let failures: Vec<Option<(usize, Failure)>> = self.pool.install(|| {
+        let drift_next = drift_next && kick;
+        let ref_position = &self.ref_position;
+        let results: Vec<ChunkResult> = self.pool.install(|| {
             p.force
                 .par_chunks_mut(CHUNK)
                 .zip(p.torque.par_chunks_mut(CHUNK))
                 .zip(p.velocity.par_chunks_mut(CHUNK))
                 .zip(p.angular_velocity.par_chunks_mut(CHUNK))
+                .zip(p.position.par_chunks_mut(CHUNK))
                 .zip(wall_chunks.into_par_iter())
                 .enumerate()
                 .with_max_len(chunks_per_task())
-                .map(|(c, ((((fs, ts), vs), ws), mut mine))| {
+                .map(|(c, (((((fs, ts), vs), ws), xs), mut mine))| {
                     let mut hits: Vec<(f64, usize, Hit)> = vec![];
                     let rows = c * CHUNK..c * CHUNK + fs.len();
                     let near: Vec<&Block> = schedule.blocks_touching(rows).collect();
@@ -678,7 +704,7 @@ impl Simulation {
                         let (e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
                         if e < end {
                             let body = Body {
-                                x: pos[i],
+                                x: xs[k],
                                 radius: radius[i],
                                 mass: mass[i],
                                 inertia: inertia[i],
@@ -713,17 +739,47 @@ impl Simulation {
                     }
                     // The exact test only for a chunk the cheap one flagged: the first
                     // failing particle in index order, as a test of each would find it.
+                    // A chunk it passes is where a failure cannot be (the cheap test is
+                    // exact for what it passes), so only it may go on to the next drift.
                     if plausible_all && positions_ok {
-                        return None;
+                        let rows = c * CHUNK..c * CHUNK + fs.len();
+                        let next = drift_next.then(|| {
+                            kick_and_drift(
+                                ChunkMotion {
+                                    x: xs,
+                                    v: vs,
+                                    w: ws,
+                                    f: fs,
+                                    t: ts,
+                                    kf: &kick_factor[rows.clone()],
+                                    x0: &ref_position[rows],
+                                },
+                                dt,
+                                dom,
+                            )
+                        });
+                        return ChunkResult::Passed(next);
                     }
-                    (0..fs.len()).find_map(|k| {
+                    let failed = (0..fs.len()).find_map(|k| {
                         let i = c * CHUNK + k;
-                        check(pos[i], vs[k], ws[k], limit2, dom).map(|f| (i, f))
-                    })
+                        check(xs[k], vs[k], ws[k], limit2, dom).map(|f| (i, f))
+                    });
+                    ChunkResult::Checked(failed)
                 })
                 .collect()
         });
-        let failure = failures.into_iter().flatten().next();
+        let failure = results.iter().find_map(|r| match r {
+            ChunkResult::Checked(f) => *f,
+            ChunkResult::Passed(_) => None,
+        });
+        let next = match failure {
+            Some(_) => {
+                self.undo_drift(&results);
+                None
+            }
+            None if drift_next => Some(self.finish_drift(&results)),
+            None => None,
+        };
 
         // Wall totals: the opposite of what the walls did to the particles, summed in order.
         for w in &mut self.walls {
@@ -747,7 +803,56 @@ impl Simulation {
             }
         }
         self.times.particle += laps.lap();
-        failure
+        (failure, next)
+    }
+
+    /// The next step's drift results, once the particle phase found no failure: each chunk
+    /// it drifted, and the chunks the cheap test flagged but the exact one passed (a spin
+    /// whose square overflows, say), drifted now, in the same operations.
+    fn finish_drift(&mut self, results: &[ChunkResult]) -> Drift {
+        let (dt, dom) = (self.dt, self.domain);
+        let p = &mut self.particles;
+        let mut all = Drift::none();
+        for (c, r) in results.iter().enumerate() {
+            let d = match r {
+                ChunkResult::Passed(Some(d)) => *d,
+                _ => {
+                    let rows = c * CHUNK..((c + 1) * CHUNK).min(p.len());
+                    kick_and_drift(
+                        ChunkMotion {
+                            x: &mut p.position[rows.clone()],
+                            v: &mut p.velocity[rows.clone()],
+                            w: &mut p.angular_velocity[rows.clone()],
+                            f: &p.force[rows.clone()],
+                            t: &p.torque[rows.clone()],
+                            kf: &self.kick_factor[rows.clone()],
+                            x0: &self.ref_position[rows],
+                        },
+                        dt,
+                        dom,
+                    )
+                }
+            };
+            all = all.join(d);
+        }
+        all
+    }
+
+    /// Takes back the next step's drift from the chunks that applied it, when another chunk
+    /// failed: the run stops at this step, and its state is this step's end (to rounding).
+    fn undo_drift(&mut self, results: &[ChunkResult]) {
+        let dt = self.dt;
+        let p = &mut self.particles;
+        for (c, r) in results.iter().enumerate() {
+            if let ChunkResult::Passed(Some(_)) = r {
+                for i in c * CHUNK..((c + 1) * CHUNK).min(p.len()) {
+                    let (kv, kw) = self.kick_factor[i];
+                    p.position[i] -= p.velocity[i] * dt;
+                    p.velocity[i] -= p.force[i] * kv;
+                    p.angular_velocity[i] -= p.torque[i] * kw;
+                }
+            }
+        }
     }
 
     fn failure(&self, i: usize, kind: Failure) -> KernelError {
@@ -1052,6 +1157,83 @@ fn plausible(x: DVec3, v: DVec3, w: DVec3, limit2: f64, dom: Aabb) -> bool {
 // about a fifth of the particle phase in a dilute flow; the cheap one about half as much
 // (BENCHMARKS.md, fourteenth sitting), and loading each position again for it was most of
 // what was left (sixteenth sitting).
+
+/// What the first half kick and drift found: the largest squared displacement since the
+/// last list build (m^2), and whether every new position passed [`plausible_position`].
+#[derive(Debug, Clone, Copy)]
+struct Drift {
+    max_disp2: f64,
+    positions_ok: bool,
+}
+
+impl Drift {
+    fn none() -> Drift {
+        Drift {
+            max_disp2: 0.0,
+            positions_ok: true,
+        }
+    }
+
+    fn join(self, other: Drift) -> Drift {
+        Drift {
+            max_disp2: self.max_disp2.max(other.max_disp2),
+            positions_ok: self.positions_ok & other.positions_ok,
+        }
+    }
+}
+
+/// A chunk of particles' motion: what the first half kick and drift change and read.
+struct ChunkMotion<'a> {
+    x: &'a mut [DVec3],
+    v: &'a mut [DVec3],
+    w: &'a mut [DVec3],
+    f: &'a [DVec3],
+    t: &'a [DVec3],
+    kf: &'a [(f64, f64)],
+    x0: &'a [DVec3],
+}
+
+/// The first half kick and the drift of one chunk (v += F dt/2m, omega += T dt/2I,
+/// x += v dt), with its largest displacement from `x0` and the cheap position test: the
+/// chunk's bounding box, and a sum that is zero only if every coordinate is finite (x * 0 is
+/// NaN for an infinite or NaN x).
+#[inline]
+fn kick_and_drift(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
+    let ChunkMotion {
+        x,
+        v,
+        w,
+        f,
+        t,
+        kf,
+        x0,
+    } = m;
+    let mut worst: f64 = 0.0;
+    let (mut lo, mut hi, mut zero) = (x[0], x[0], DVec3::ZERO);
+    for k in 0..x.len() {
+        let (kv, kw) = kf[k];
+        v[k] += f[k] * kv;
+        w[k] += t[k] * kw;
+        x[k] += v[k] * dt;
+        worst = worst.max((x[k] - x0[k]).length_squared());
+        lo = lo.min(x[k]);
+        hi = hi.max(x[k]);
+        zero += x[k] * 0.0;
+    }
+    Drift {
+        max_disp2: worst,
+        positions_ok: zero == DVec3::ZERO
+            && plausible_position(lo, dom)
+            && plausible_position(hi, dom),
+    }
+}
+
+/// One chunk's end of the particle phase: it passed the cheap test (with the next step's
+/// drift results when it applied them), or it was checked exactly (the first failure).
+enum ChunkResult {
+    Passed(Option<Drift>),
+    Checked(Option<(usize, Failure)>),
+}
 
 /// The velocity half of the cheap test.
 #[inline(always)]
