@@ -13,7 +13,8 @@ use std::time::{Duration, Instant};
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct PhaseTimes {
     /// First half kick and drift (v += F dt/2m, omega += T dt/2I, x += v dt), and the walls'
-    /// motion.
+    /// motion. Within [`crate::sim::Simulation::run`] the kick and drift of every step after
+    /// the first are done in the step before's particle phase, and counted there.
     pub integrate: Duration,
     /// Factories creating particles.
     pub insert: Duration,
@@ -23,7 +24,8 @@ pub struct PhaseTimes {
     /// Pair forces: every listed pair through the contact laws (and bonds).
     pub pair: Duration,
     /// Each particle's sums of its pairs, its wall contacts (the wall laws), gravity, the
-    /// second half kick and the failure checks; then the walls' totals.
+    /// second half kick and the failure checks (within a run, also the next step's first
+    /// half kick and drift); then the walls' totals.
     pub particle: Duration,
 }
 
