@@ -99,8 +99,11 @@ fn hidden_effects_are_ranked_first_and_fitting_them_brings_the_error_to_the_nois
             .collect();
         let rate = scratch().join(format!("rate-{effect}"));
         let _ = std::fs::remove_dir_all(&rate);
-        let mut args = vec![effect.to_string(), strength.to_string()];
-        args.push(rate.to_str().unwrap().to_string());
+        let mut args = vec![
+            effect.to_string(),
+            strength.to_string(),
+            rate.display().to_string(),
+        ];
         args.extend(seeds.iter().cloned());
         script(
             "detection_rate.sh",
