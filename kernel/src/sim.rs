@@ -40,11 +40,25 @@ use glam::DVec3;
 use pair_forces::{PartialSums, add_pair_forces};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use team::Team;
 use wall_forces::{Body, WallList, WallRows, add_wall_forces};
 
 mod drift;
 mod pair_forces;
+mod team;
 mod wall_forces;
+
+/// One particle-phase task's rows: force, torque, velocity, spin, position, wall contacts.
+type ChunkRows<'a> = (
+    (
+        (
+            ((&'a mut [DVec3], &'a mut [DVec3]), &'a mut [DVec3]),
+            &'a mut [DVec3],
+        ),
+        &'a mut [DVec3],
+    ),
+    WallRows<'a>,
+);
 
 /// Steps between spatial reorderings of the particles (cell order, for cache locality; as
 /// LAMMPS's `atom_modify sort`). A fixed step schedule, not a rebuild count, so that runs
@@ -335,7 +349,7 @@ impl Simulation {
         sim.check_overlaps()?;
         sim.insert_particles();
         sim.rebuild();
-        sim.compute_forces(false, true, false);
+        sim.compute_forces(false, true, false, None);
         Ok(sim)
     }
 
@@ -369,13 +383,35 @@ impl Simulation {
     pub fn run(&mut self, n: u64) -> Result<()> {
         // Enter the pool once: every parallel phase below then runs without a hand-off.
         let pool = std::sync::Arc::clone(&self.pool);
-        pool.install(|| {
-            let mut drifted = None;
-            for s in 0..n {
-                drifted = self.step(drifted, s + 1 < n)?;
+        let helpers = pool.current_num_threads() - 1;
+        if helpers == 0 {
+            return pool.install(|| self.steps(n, None));
+        }
+        // The pool's first thread leads the steps; the others stay awake as its team.
+        let team = Team::new(helpers);
+        let leader = std::sync::Mutex::new(Some(self));
+        let mut out = pool.broadcast(|ctx| {
+            if ctx.index() != 0 {
+                team.help(ctx.index());
+                return None;
             }
-            Ok(())
-        })
+            let sim = leader.lock().ok()?.take()?;
+            let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                sim.steps(n, Some(&team))
+            }));
+            team.release();
+            Some(out.unwrap_or_else(|p| std::panic::resume_unwind(p)))
+        });
+        out.swap_remove(0).expect("the leader's result")
+    }
+
+    /// `n` steps, each drifting the next, the parallel phases on `team` when given.
+    fn steps(&mut self, n: u64, team: Option<&Team>) -> Result<()> {
+        let mut drifted = None;
+        for s in 0..n {
+            drifted = self.step(drifted, s + 1 < n, team)?;
+        }
+        Ok(())
     }
 
     /// Number of worker threads.
@@ -385,14 +421,19 @@ impl Simulation {
 
     /// One velocity-Verlet step.
     pub fn advance(&mut self) -> Result<()> {
-        self.step(None, false).map(|_| ())
+        self.step(None, false, None).map(|_| ())
     }
 
     /// One velocity-Verlet step. `drifted`: the first half kick and drift were already
     /// applied by the previous step's particle phase, which found these displacement and
     /// position results. With `drift_next`, this step's particle phase applies the next
     /// step's, and returns its results.
-    fn step(&mut self, drifted: Option<Drift>, drift_next: bool) -> Result<Option<Drift>> {
+    fn step(
+        &mut self,
+        drifted: Option<Drift>,
+        drift_next: bool,
+        team: Option<&Team>,
+    ) -> Result<Option<Drift>> {
         let mut laps = Laps::start();
         let dt = self.dt;
         if self.kick_factor.len() != self.particles.len() {
@@ -467,7 +508,7 @@ impl Simulation {
             self.check_loaded_step();
         }
         self.times.neighbor += laps.lap();
-        match self.compute_forces(true, positions_ok, drift_next) {
+        match self.compute_forces(true, positions_ok, drift_next, team) {
             (None, next) => Ok(next),
             (Some((i, kind)), _) => Err(self.failure(i, kind)),
         }
@@ -613,6 +654,7 @@ impl Simulation {
         kick: bool,
         positions_ok: bool,
         drift_next: bool,
+        team: Option<&Team>,
     ) -> (Option<(usize, Failure)>, Option<Drift>) {
         let mut laps = Laps::start();
         let dt = self.dt;
@@ -626,7 +668,7 @@ impl Simulation {
         let sums = &mut self.pair_sums;
         self.pairs_carrying = self
             .pool
-            .install(|| add_pair_forces(p, model, pairs, schedule, sums, (dt, time)));
+            .install(|| add_pair_forces(p, model, pairs, schedule, sums, (dt, time), team));
         self.times.pair += laps.lap();
 
         // Particle phase: each particle's sum (gravity, its share of each block's partial
@@ -676,100 +718,116 @@ impl Simulation {
         let kick_factor = &self.kick_factor;
         let drift_next = drift_next && kick;
         let ref_position = &self.ref_position;
-        let results: Vec<ChunkResult> = self.pool.install(|| {
-            p.force
-                .par_chunks_mut(CHUNK)
-                .zip(p.torque.par_chunks_mut(CHUNK))
-                .zip(p.velocity.par_chunks_mut(CHUNK))
-                .zip(p.angular_velocity.par_chunks_mut(CHUNK))
-                .zip(p.position.par_chunks_mut(CHUNK))
-                .zip(wall_chunks.into_par_iter())
-                .enumerate()
-                .with_max_len(chunks_per_task())
-                .map(|(c, (((((fs, ts), vs), ws), xs), mut mine))| {
-                    let mut hits: Vec<(f64, usize, Hit)> = vec![];
-                    let rows = c * CHUNK..c * CHUNK + fs.len();
-                    let near: Vec<&Block> = schedule.blocks_touching(rows).collect();
-                    // Whether every kicked particle of the chunk passed the cheap test.
-                    let mut plausible_all = true;
-                    for k in 0..fs.len() {
-                        let i = c * CHUNK + k;
-                        let mut f = gravity * mass[i];
-                        let mut t = DVec3::ZERO;
-                        for b in &near {
-                            if b.touch.contains(&i) {
-                                let at = b.offset + i - b.touch.start;
-                                f += sums.force[at];
-                                t += sums.torque[at];
-                            }
-                        }
-                        let (e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
-                        if e < end {
-                            let body = Body {
-                                x: xs[k],
-                                radius: radius[i],
-                                mass: mass[i],
-                                inertia: inertia[i],
-                                material: material[i] as usize,
-                                v: vs[k],
-                                w: ws[k],
-                            };
-                            (f, t) = add_wall_forces(
-                                &body,
-                                e..end,
-                                &list,
-                                &mut mine,
-                                walls,
-                                model,
-                                stride,
-                                dt,
-                                &mut hits,
-                                (f, t),
-                            );
-                        }
-                        fs[k] = f;
-                        ts[k] = t;
-                        if kick {
-                            let (kv, kw) = kick_factor[i];
-                            // Tested from registers: reading back what was just stored
-                            // loads across two stores, which the CPU cannot forward.
-                            let (v, w) = (vs[k] + f * kv, ws[k] + t * kw);
-                            vs[k] = v;
-                            ws[k] = w;
-                            plausible_all &= plausible_motion(v, w, limit2);
-                        }
+        // One chunk of particles: rows c * CHUNK.. of each array, and their wall rows.
+        let chunk = |c: usize, (((((fs, ts), vs), ws), xs), mut mine): ChunkRows| -> ChunkResult {
+            let mut hits: Vec<(f64, usize, Hit)> = vec![];
+            let rows = c * CHUNK..c * CHUNK + fs.len();
+            let near: Vec<&Block> = schedule.blocks_touching(rows).collect();
+            // Whether every kicked particle of the chunk passed the cheap test.
+            let mut plausible_all = true;
+            for k in 0..fs.len() {
+                let i = c * CHUNK + k;
+                let mut f = gravity * mass[i];
+                let mut t = DVec3::ZERO;
+                for b in &near {
+                    if b.touch.contains(&i) {
+                        let at = b.offset + i - b.touch.start;
+                        f += sums.force[at];
+                        t += sums.torque[at];
                     }
-                    // The exact test only for a chunk the cheap one flagged: the first
-                    // failing particle in index order, as a test of each would find it.
-                    // A chunk it passes is where a failure cannot be (the cheap test is
-                    // exact for what it passes), so only it may go on to the next drift.
-                    if plausible_all && positions_ok {
-                        let rows = c * CHUNK..c * CHUNK + fs.len();
-                        let next = drift_next.then(|| {
-                            kick_and_drift(
-                                ChunkMotion {
-                                    x: xs,
-                                    v: vs,
-                                    w: ws,
-                                    f: fs,
-                                    t: ts,
-                                    kf: &kick_factor[rows.clone()],
-                                    x0: &ref_position[rows],
-                                },
-                                dt,
-                                dom,
-                            )
-                        });
-                        return ChunkResult::Passed(next);
-                    }
-                    let failed = (0..fs.len()).find_map(|k| {
-                        let i = c * CHUNK + k;
-                        check(xs[k], vs[k], ws[k], limit2, dom).map(|f| (i, f))
-                    });
-                    ChunkResult::Checked(failed)
-                })
-                .collect()
-        });
+                }
+                let (e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
+                if e < end {
+                    let body = Body {
+                        x: xs[k],
+                        radius: radius[i],
+                        mass: mass[i],
+                        inertia: inertia[i],
+                        material: material[i] as usize,
+                        v: vs[k],
+                        w: ws[k],
+                    };
+                    (f, t) = add_wall_forces(
+                        &body,
+                        e..end,
+                        &list,
+                        &mut mine,
+                        walls,
+                        model,
+                        stride,
+                        dt,
+                        &mut hits,
+                        (f, t),
+                    );
+                }
+                fs[k] = f;
+                ts[k] = t;
+                if kick {
+                    let (kv, kw) = kick_factor[i];
+                    // Tested from registers: reading back what was just stored
+                    // loads across two stores, which the CPU cannot forward.
+                    let (v, w) = (vs[k] + f * kv, ws[k] + t * kw);
+                    vs[k] = v;
+                    ws[k] = w;
+                    plausible_all &= plausible_motion(v, w, limit2);
+                }
+            }
+            // The exact test only for a chunk the cheap one flagged: the first
+            // failing particle in index order, as a test of each would find it.
+            // A chunk it passes is where a failure cannot be (the cheap test is
+            // exact for what it passes), so only it may go on to the next drift.
+            if plausible_all && positions_ok {
+                let rows = c * CHUNK..c * CHUNK + fs.len();
+                let next = drift_next.then(|| {
+                    kick_and_drift(
+                        ChunkMotion {
+                            x: xs,
+                            v: vs,
+                            w: ws,
+                            f: fs,
+                            t: ts,
+                            kf: &kick_factor[rows.clone()],
+                            x0: &ref_position[rows],
+                        },
+                        dt,
+                        dom,
+                    )
+                });
+                return ChunkResult::Passed(next);
+            }
+            let failed = (0..fs.len()).find_map(|k| {
+                let i = c * CHUNK + k;
+                check(xs[k], vs[k], ws[k], limit2, dom).map(|f| (i, f))
+            });
+            ChunkResult::Checked(failed)
+        };
+        let results: Vec<ChunkResult> = match team {
+            Some(team) => {
+                let items: Vec<ChunkRows> = p
+                    .force
+                    .chunks_mut(CHUNK)
+                    .zip(p.torque.chunks_mut(CHUNK))
+                    .zip(p.velocity.chunks_mut(CHUNK))
+                    .zip(p.angular_velocity.chunks_mut(CHUNK))
+                    .zip(p.position.chunks_mut(CHUNK))
+                    .zip(wall_chunks)
+                    .collect();
+                team.map(items, chunk)
+            }
+            None => self.pool.install(|| {
+                p.force
+                    .par_chunks_mut(CHUNK)
+                    .zip(p.torque.par_chunks_mut(CHUNK))
+                    .zip(p.velocity.par_chunks_mut(CHUNK))
+                    .zip(p.angular_velocity.par_chunks_mut(CHUNK))
+                    .zip(p.position.par_chunks_mut(CHUNK))
+                    .zip(wall_chunks.into_par_iter())
+                    .enumerate()
+                    .with_max_len(chunks_per_task())
+                    .map(|(c, rows)| chunk(c, rows))
+                    .collect()
+            }),
+        };
         let failure = results.iter().find_map(|r| match r {
             ChunkResult::Checked(f) => *f,
             ChunkResult::Passed(_) => None,

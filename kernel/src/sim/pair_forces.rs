@@ -2,6 +2,7 @@
 //! both particles' partial sums as they are computed, block by block of the
 //! [`PairSchedule`] (see there why the sums come out the same on any number of threads).
 
+use super::team::Team;
 use crate::contact::{Contact, ContactModel, ContactOut};
 use crate::neighbor::pairs::zeroed;
 use crate::neighbor::schedule::Block;
@@ -19,7 +20,7 @@ pub(super) struct PartialSums {
 
 /// Evaluates every listed pair and adds its force and torques, on both particles, to the
 /// partial sums of its block. Returns how many pairs carry force. Run inside the
-/// simulation's thread pool.
+/// simulation's thread pool, or on `team`.
 pub(super) fn add_pair_forces(
     p: &Particles,
     model: &ContactModel,
@@ -27,6 +28,7 @@ pub(super) fn add_pair_forces(
     schedule: &PairSchedule,
     sums: &mut PartialSums,
     (dt, time): (f64, f64),
+    team: Option<&Team>,
 ) -> usize {
     let PairList {
         row_start,
@@ -67,11 +69,17 @@ pub(super) fn add_pair_forces(
         dt,
         time,
     };
-    tasks
-        .into_par_iter()
-        .with_max_len(1)
-        .map(|(block, h, f, t)| ctx.block(block, h, f, t))
-        .sum()
+    match team {
+        Some(team) => team
+            .map(tasks, |_, (block, h, f, t)| ctx.block(block, h, f, t))
+            .into_iter()
+            .sum(),
+        None => tasks
+            .into_par_iter()
+            .with_max_len(1)
+            .map(|(block, h, f, t)| ctx.block(block, h, f, t))
+            .sum(),
+    }
 }
 
 /// What every block reads.

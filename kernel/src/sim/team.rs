@@ -1,0 +1,305 @@
+//! The threads of a run, kept awake between the parallel phases of its steps.
+//!
+//! A step has two parallel phases (pairs, then particles) of a few hundred microseconds
+//! each at 20,000 particles. Rayon's idle worker sleeps in the kernel after a few dozen
+//! rounds without work, and its waiting thread sleeps at the end of a join; on a virtual
+//! machine each wake-up is a futex call and an interrupt to a halted CPU. `strace` of a
+//! two-thread run found 3,293 futex calls and 100,377 `sched_yield`s in 5,000 steps
+//! (BENCHMARKS.md, nineteenth sitting). OpenMP runtimes avoid that with an active wait:
+//! the team's threads spin between regions. [`Team`] is that, for the run loop only: the
+//! leader (the thread that runs the steps) posts each phase's work, every helper takes
+//! items of it from one counter, and between phases the helpers poll for the next phase
+//! and for rayon work (the neighbour rebuild stays on rayon), yielding the CPU to the
+//! operating system when they have polled long without finding any.
+//!
+//! Which thread computes an item never changes a bit: items own disjoint data, and their
+//! results come back in item order.
+
+use std::cell::UnsafeCell;
+use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+
+/// Idle polls a waiting thread spins (a CPU hint between polls) before each later poll
+/// also yields to the operating system: about 20 microseconds, longer than the gap
+/// between two phases of a step, so within a run no thread gives up its CPU.
+const SPINS_BEFORE_YIELD: u32 = 2_000;
+
+/// The work every thread of the team runs once per phase, its lifetime erased.
+type Job = *const (dyn Fn(usize) + Sync + 'static);
+
+/// A leader and its helpers (see the module's documentation).
+pub(crate) struct Team {
+    helpers: usize,
+    /// Bumped by the leader when it posts a job.
+    posted: AtomicUsize,
+    /// Written by the leader before `posted` is bumped; read by helpers after.
+    job: UnsafeCell<Option<Job>>,
+    /// Helpers finished with the current job.
+    finished: AtomicUsize,
+    /// The first panic of a helper's part of the current job.
+    panic: Mutex<Option<Box<dyn std::any::Any + Send>>>,
+    quit: AtomicBool,
+}
+
+// SAFETY: `job` is written only by the leader while no helper reads it (before `posted` is
+// bumped, after every helper finished the previous job), and read by helpers only after
+// they saw `posted` change (Acquire, pairing with the leader's Release).
+unsafe impl Sync for Team {}
+
+impl Team {
+    /// A team of the calling thread (the leader) and `helpers` threads that will call
+    /// [`Team::help`].
+    pub fn new(helpers: usize) -> Team {
+        Team {
+            helpers,
+            posted: AtomicUsize::new(0),
+            job: UnsafeCell::new(None),
+            finished: AtomicUsize::new(0),
+            panic: Mutex::new(None),
+            quit: AtomicBool::new(false),
+        }
+    }
+
+    /// Runs `f(thread)` on the leader (thread 0) and on every helper (1 to `helpers`), and
+    /// returns when all are done, so that `f` may borrow the leader's data. A panic of any
+    /// part is raised here, after all are done. Leader only.
+    fn run_on_all(&self, f: &(dyn Fn(usize) + Sync)) {
+        if self.helpers == 0 {
+            f(0);
+            return;
+        }
+        let job: *const (dyn Fn(usize) + Sync + '_) = f;
+        // SAFETY: only the lifetime changes. The helpers call the job before they count
+        // themselves finished, and this function returns only after every helper has.
+        let job: Job = unsafe { std::mem::transmute(job) };
+        // SAFETY: every helper finished the previous job, so none reads `job` now.
+        unsafe { *self.job.get() = Some(job) };
+        self.finished.store(0, Ordering::Relaxed);
+        self.posted.fetch_add(1, Ordering::Release);
+        let mine = catch_unwind(AssertUnwindSafe(|| f(0)));
+        let mut idle = 0;
+        while self.finished.load(Ordering::Acquire) < self.helpers {
+            wait(&mut idle);
+        }
+        if let Err(p) = mine {
+            resume_unwind(p);
+        }
+        if let Some(p) = self.panic.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            resume_unwind(p);
+        }
+    }
+
+    /// Helper `thread`'s (1 to `helpers`) part of a run: each job the leader posts, and
+    /// rayon's work between them, until [`Team::release`].
+    pub fn help(&self, thread: usize) {
+        // From zero, not the current count: the leader may post before a helper starts.
+        let mut seen = 0;
+        let mut idle = 0;
+        loop {
+            let now = self.posted.load(Ordering::Acquire);
+            if now != seen {
+                seen = now;
+                // SAFETY: see `impl Sync`; the leader keeps the job alive until this
+                // helper is counted in `finished`.
+                let job = unsafe { (*self.job.get()).expect("a posted job") };
+                if let Err(p) = catch_unwind(AssertUnwindSafe(|| unsafe { (*job)(thread) })) {
+                    let mut first = self.panic.lock().unwrap_or_else(|e| e.into_inner());
+                    first.get_or_insert(p);
+                }
+                self.finished.fetch_add(1, Ordering::Release);
+                idle = 0;
+            } else if self.quit.load(Ordering::Acquire) {
+                return;
+            } else if rayon::yield_now() == Some(rayon::Yield::Executed) {
+                idle = 0;
+            } else {
+                wait(&mut idle);
+            }
+        }
+    }
+
+    /// Lets the helpers return from [`Team::help`]. Leader only, after its last job.
+    pub fn release(&self) {
+        self.quit.store(true, Ordering::Release);
+    }
+
+    /// `f(k, items[k])` for every item, spread over the team; the results in item order.
+    ///
+    /// Each thread starts on its own equal run of consecutive items, in order, and one
+    /// that finishes its run takes items from the far end of another's. So threads write
+    /// next to each other's items at run ends only: handing out items one by one from a
+    /// shared counter interleaved the threads item by item, and the cache lines at each
+    /// item's edges went back and forth (the particle phase took 50 % longer on two threads).
+    pub fn map<T: Send, R: Send>(&self, items: Vec<T>, f: impl Fn(usize, T) -> R + Sync) -> Vec<R> {
+        if self.helpers == 0 {
+            return items
+                .into_iter()
+                .enumerate()
+                .map(|(k, t)| f(k, t))
+                .collect();
+        }
+        let n = items.len();
+        let slots = Slots(
+            items
+                .into_iter()
+                .map(|t| UnsafeCell::new((Some(t), None)))
+                .collect(),
+        );
+        let threads = self.helpers + 1;
+        let runs: Vec<Run> = (0..threads)
+            .map(|t| Run::new(t * n / threads, (t + 1) * n / threads))
+            .collect();
+        self.run_on_all(&|me| {
+            let others = (1..threads).map(|d| &runs[(me + d) % threads]);
+            while let Some(k) = runs[me]
+                .take_front()
+                .or_else(|| others.clone().find_map(Run::take_back))
+            {
+                // SAFETY: the runs hand out each index once, so this thread alone
+                // touches slot k.
+                let slot = unsafe { slots.take(k) };
+                let item = slot.0.take().expect("each item once");
+                slot.1 = Some(f(k, item));
+            }
+        });
+        slots
+            .0
+            .into_iter()
+            .map(|s| s.into_inner().1.expect("every item done"))
+            .collect()
+    }
+}
+
+/// The items `front..back` of a thread's run not yet taken, packed in one word so that the
+/// owner taking from the front and a thief from the back never take the same item.
+struct Run(AtomicU64);
+
+impl Run {
+    fn new(front: usize, back: usize) -> Run {
+        Run(AtomicU64::new(((front as u64) << 32) | back as u64))
+    }
+
+    fn take_front(&self) -> Option<usize> {
+        self.take(|front, back| (front < back).then(|| (front, (front + 1, back))))
+    }
+
+    fn take_back(&self) -> Option<usize> {
+        self.take(|front, back| (front < back).then(|| (back - 1, (front, back - 1))))
+    }
+
+    /// Takes the item `pick` chooses from (front, back), leaving the range it returns.
+    fn take(
+        &self,
+        pick: impl Fn(usize, usize) -> Option<(usize, (usize, usize))>,
+    ) -> Option<usize> {
+        let mut now = self.0.load(Ordering::Acquire);
+        loop {
+            let (front, back) = ((now >> 32) as usize, (now & 0xffff_ffff) as usize);
+            let (item, (f, b)) = pick(front, back)?;
+            let next = ((f as u64) << 32) | b as u64;
+            match self
+                .0
+                .compare_exchange_weak(now, next, Ordering::AcqRel, Ordering::Acquire)
+            {
+                Ok(_) => return Some(item),
+                Err(seen) => now = seen,
+            }
+        }
+    }
+}
+
+/// Items and their results, one cell per item.
+struct Slots<T, R>(Vec<UnsafeCell<(Option<T>, Option<R>)>>);
+
+// SAFETY: each cell is accessed by one thread at a time (see `Team::map`).
+unsafe impl<T: Send, R: Send> Sync for Slots<T, R> {}
+
+impl<T, R> Slots<T, R> {
+    /// Item k's cell.
+    ///
+    /// # Safety
+    /// No other thread may access cell k while the reference lives.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn take(&self, k: usize) -> &mut (Option<T>, Option<R>) {
+        unsafe { &mut *self.0[k].get() }
+    }
+}
+
+/// One idle poll's pause: a CPU hint, and after [`SPINS_BEFORE_YIELD`] polls also a yield
+/// to the operating system, so that a thread waiting on a busy machine lets others run.
+fn wait(idle: &mut u32) {
+    *idle = idle.saturating_add(1);
+    if *idle < SPINS_BEFORE_YIELD {
+        std::hint::spin_loop();
+    } else {
+        std::thread::yield_now();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with_team<R: Send>(helpers: usize, lead: impl FnOnce(&Team) -> R + Send) -> R {
+        let team = Team::new(helpers);
+        std::thread::scope(|s| {
+            for h in 1..=helpers {
+                let team = &team;
+                s.spawn(move || team.help(h));
+            }
+            let out = catch_unwind(AssertUnwindSafe(|| lead(&team)));
+            team.release();
+            out.unwrap_or_else(|p| resume_unwind(p))
+        })
+    }
+
+    #[test]
+    fn map_returns_every_result_in_item_order() {
+        for helpers in 0..3 {
+            let out = with_team(helpers, |team| {
+                (0..50)
+                    .map(|round| team.map((0..round).collect(), |k, x: usize| (k, x * x)))
+                    .collect::<Vec<_>>()
+            });
+            for (round, r) in out.iter().enumerate() {
+                let expected: Vec<(usize, usize)> = (0..round).map(|x| (x, x * x)).collect();
+                assert_eq!(r, &expected, "{helpers} helpers, round {round}");
+            }
+        }
+    }
+
+    #[test]
+    fn helpers_take_part() {
+        let threads = with_team(1, |team| {
+            let ids = team.map((0..64).collect(), |_, _: i32| {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+                std::thread::current().id()
+            });
+            let mut ids: Vec<_> = ids.into_iter().collect();
+            ids.sort_by_key(|id| format!("{id:?}"));
+            ids.dedup();
+            ids.len()
+        });
+        assert_eq!(threads, 2);
+    }
+
+    #[test]
+    fn a_helpers_panic_reaches_the_leader_after_the_job() {
+        let r = catch_unwind(AssertUnwindSafe(|| {
+            with_team(1, |team| {
+                team.map((0..64).collect(), |k, _: i32| {
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                    assert!(k != 40, "item 40 fails");
+                })
+            })
+        }));
+        let msg = r.expect_err("the panic is raised");
+        let msg = msg
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| msg.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        assert!(msg.contains("item 40 fails"), "{msg}");
+    }
+}
