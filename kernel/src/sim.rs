@@ -21,7 +21,9 @@
 //!
 //! Every sum runs in an order that does not depend on the thread count, so 1 and 2 threads
 //! give the same bits (work is split in fixed chunks of [`CHUNK`] rows, and the pair phase
-//! in blocks set by the pair list and its contacts).
+//! in blocks set by the pair list and its contacts). Within [`Simulation::run`] on several
+//! threads, the pair and particle phases run on a team whose threads stay awake between
+//! phases (`team.rs`); elsewhere every parallel loop is rayon's.
 
 use crate::contact::{BondState, BondStatus, ContactModel};
 use crate::error::{KernelError, Result};
