@@ -722,7 +722,10 @@ impl Simulation {
         let ref_position = &self.ref_position;
         // One chunk of particles: rows c * CHUNK.. of each array, and their wall rows.
         let chunk = |c: usize, (((((fs, ts), vs), ws), xs), mut mine): ChunkRows| -> ChunkResult {
-            let mut hits: Vec<(f64, usize, Hit)> = vec![];
+            // Room for a particle's usual wall hits: growing it took glibc's arena lock
+            // (`realloc` bypasses the per-thread cache), and on two threads `strace` found
+            // a futex wait on that lock about once a step (BENCHMARKS.md, twentieth sitting).
+            let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
             let rows = c * CHUNK..c * CHUNK + fs.len();
             let near: Vec<&Block> = schedule.blocks_touching(rows).collect();
             // Whether every kicked particle of the chunk passed the cheap test.

@@ -97,6 +97,12 @@ impl PairList {
         // Two passes, so that a rebuild holds only the old list and the new one: first the
         // partners of every row (4 bytes a pair), then, with the rows' places known, each
         // task copies the carried history straight into its part of the new list.
+        // Room for a chunk's partners at the old list's mean with a quarter to spare. Grown
+        // by doubling, each chunk's vector was reallocated about eight times, on both
+        // threads at once, through glibc's arena lock (`realloc` bypasses the per-thread
+        // cache; `strace` counted its futex waits: BENCHMARKS.md, twentieth sitting).
+        let old_rows = self.row_start.len().saturating_sub(1).max(1);
+        let per_row = self.j.len().div_ceil(old_rows).max(4) * 5 / 4;
         let chunks: Vec<RowChunk> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .with_max_len(chunks_per_task())
@@ -104,7 +110,7 @@ impl PairList {
                 let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
                 let mut out = RowChunk {
                     counts: Vec::with_capacity(rows.len()),
-                    j: vec![],
+                    j: Vec::with_capacity(rows.len() * per_row),
                 };
                 let mut near = Vec::with_capacity(64);
                 for i in rows {
