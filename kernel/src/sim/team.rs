@@ -18,7 +18,7 @@
 use std::cell::UnsafeCell;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// Idle polls a waiting thread spins (a CPU hint between polls) before each later poll
 /// also yields to the operating system. A poll takes about 50 ns on the project's VM (a
@@ -30,23 +30,31 @@ const SPINS_BEFORE_YIELD: u32 = 2_000;
 /// The work every thread of the team runs once per phase, its lifetime erased.
 type Job = *const (dyn Fn(usize) + Sync + 'static);
 
+/// [`Team::gate`]: set once the leader's own part of the job is done; no helper may
+/// enter the job after it.
+const CLOSED: u64 = 1 << 31;
+/// [`Team::gate`]: the helpers inside the job.
+const INSIDE: u64 = CLOSED - 1;
+
 /// A leader and its helpers (see the module's documentation).
 pub(crate) struct Team {
     helpers: usize,
-    /// Bumped by the leader when it posts a job.
-    posted: AtomicUsize,
-    /// Written by the leader before `posted` is bumped; read by helpers after.
+    /// The current job's number (high 32 bits), whether it is [`CLOSED`], and how many
+    /// helpers are [`INSIDE`] it. A helper takes part in a job only if it enters before the
+    /// leader closes it, and the leader waits only for those inside: a helper the operating
+    /// system has not scheduled (more threads than cores) does not hold up a phase, since
+    /// the leader takes the items of its run.
+    gate: AtomicU64,
+    /// Written by the leader before it opens a job; read by helpers inside it.
     job: UnsafeCell<Option<Job>>,
-    /// Helpers finished with the current job.
-    finished: AtomicUsize,
     /// The first panic of a helper's part of the current job.
     panic: Mutex<Option<Box<dyn std::any::Any + Send>>>,
     quit: AtomicBool,
 }
 
-// SAFETY: `job` is written only by the leader while no helper reads it (before `posted` is
-// bumped, after every helper finished the previous job), and read by helpers only after
-// they saw `posted` change (Acquire, pairing with the leader's Release).
+// SAFETY: `job` is written only by the leader while no helper is inside a job (the previous
+// job closed with none inside), and read by a helper only inside one (its entry, Acquire,
+// pairs with the leader's opening store, Release).
 unsafe impl Sync for Team {}
 
 impl Team {
@@ -55,34 +63,37 @@ impl Team {
     pub fn new(helpers: usize) -> Team {
         Team {
             helpers,
-            posted: AtomicUsize::new(0),
+            gate: AtomicU64::new(0),
             job: UnsafeCell::new(None),
-            finished: AtomicUsize::new(0),
             panic: Mutex::new(None),
             quit: AtomicBool::new(false),
         }
     }
 
-    /// Runs `f(thread)` on the leader (thread 0) and on every helper (1 to `helpers`), and
-    /// returns when all are done, so that `f` may borrow the leader's data. A panic of any
-    /// part is raised here, after all are done. Leader only.
+    /// Runs `f(thread)` on the leader (thread 0) and on each helper (1 to `helpers`) that
+    /// comes before the leader's own call returns, and returns when all of those are done,
+    /// so that `f` may borrow the leader's data. `f` must therefore do all the work when
+    /// the leader alone runs it. A panic of any part is raised here, after all are done.
+    /// Leader only.
     fn run_on_all(&self, f: &(dyn Fn(usize) + Sync)) {
         if self.helpers == 0 {
             f(0);
             return;
         }
         let job: *const (dyn Fn(usize) + Sync + '_) = f;
-        // SAFETY: only the lifetime changes. The helpers call the job before they count
-        // themselves finished, and this function returns only after every helper has.
+        // SAFETY: only the lifetime changes. Helpers call the job only inside it, and this
+        // function returns only when none is inside and none can enter.
         let job: Job = unsafe { std::mem::transmute(job) };
-        // SAFETY: every helper finished the previous job, so none reads `job` now.
+        // SAFETY: no helper is inside a job, so none reads `job` now.
         unsafe { *self.job.get() = Some(job) };
-        self.finished.store(0, Ordering::Relaxed);
-        self.posted.fetch_add(1, Ordering::Release);
+        let number = (self.gate.load(Ordering::Relaxed) >> 32).wrapping_add(1) & 0xffff_ffff;
+        self.gate.store(number << 32, Ordering::Release);
         let mine = catch_unwind(AssertUnwindSafe(|| f(0)));
+        let mut gate = self.gate.fetch_or(CLOSED, Ordering::AcqRel);
         let mut idle = 0;
-        while self.finished.load(Ordering::Acquire) < self.helpers {
+        while gate & INSIDE != 0 {
             wait(&mut idle);
+            gate = self.gate.load(Ordering::Acquire);
         }
         if let Err(p) = mine {
             resume_unwind(p);
@@ -95,21 +106,24 @@ impl Team {
     /// Helper `thread`'s (1 to `helpers`) part of a run: each job the leader posts, and
     /// rayon's work between them, until [`Team::release`].
     pub fn help(&self, thread: usize) {
-        // From zero, not the current count: the leader may post before a helper starts.
+        // Job numbers start at 1, so a helper that starts late still tries the current one.
         let mut seen = 0;
         let mut idle = 0;
         loop {
-            let now = self.posted.load(Ordering::Acquire);
-            if now != seen {
-                seen = now;
-                // SAFETY: see `impl Sync`; the leader keeps the job alive until this
-                // helper is counted in `finished`.
-                let job = unsafe { (*self.job.get()).expect("a posted job") };
-                if let Err(p) = catch_unwind(AssertUnwindSafe(|| unsafe { (*job)(thread) })) {
-                    let mut first = self.panic.lock().unwrap_or_else(|e| e.into_inner());
-                    first.get_or_insert(p);
+            let gate = self.gate.load(Ordering::Acquire);
+            if gate >> 32 != seen {
+                seen = gate >> 32;
+                if self.enter(gate) {
+                    // SAFETY: see `impl Sync`; the leader keeps the job alive while this
+                    // helper is inside.
+                    let job = unsafe { (*self.job.get()).expect("an open job") };
+                    let done = catch_unwind(AssertUnwindSafe(|| unsafe { (*job)(thread) }));
+                    if let Err(p) = done {
+                        let mut first = self.panic.lock().unwrap_or_else(|e| e.into_inner());
+                        first.get_or_insert(p);
+                    }
+                    self.gate.fetch_sub(1, Ordering::Release);
                 }
-                self.finished.fetch_add(1, Ordering::Release);
                 idle = 0;
             } else if self.quit.load(Ordering::Acquire) {
                 return;
@@ -119,6 +133,23 @@ impl Team {
                 wait(&mut idle);
             }
         }
+    }
+
+    /// Enters the job `gate` (as loaded) names, unless the leader closed it first.
+    fn enter(&self, mut gate: u64) -> bool {
+        let number = gate >> 32;
+        while gate >> 32 == number && gate & CLOSED == 0 {
+            match self.gate.compare_exchange_weak(
+                gate,
+                gate + 1,
+                Ordering::AcqRel,
+                Ordering::Acquire,
+            ) {
+                Ok(_) => return true,
+                Err(now) => gate = now,
+            }
+        }
+        false
     }
 
     /// Lets the helpers return from [`Team::help`]. Leader only, after its last job.
@@ -268,6 +299,17 @@ mod tests {
                 let expected: Vec<(usize, usize)> = (0..round).map(|x| (x, x * x)).collect();
                 assert_eq!(r, &expected, "{helpers} helpers, round {round}");
             }
+        }
+    }
+
+    #[test]
+    fn a_helper_that_never_comes_does_not_hold_up_the_leader() {
+        // A team of two whose helper thread never runs (as when the operating system
+        // schedules more threads than it has cores): the leader does every item.
+        let team = Team::new(1);
+        for round in 0..20 {
+            let out = team.map((0..round).collect(), |k, x: usize| k + x);
+            assert_eq!(out, (0..round).map(|x| 2 * x).collect::<Vec<_>>());
         }
     }
 
