@@ -806,27 +806,20 @@ impl Simulation {
             });
             ChunkResult::Checked(failed)
         };
+        let items: Vec<ChunkRows> = p
+            .force
+            .chunks_mut(CHUNK)
+            .zip(p.torque.chunks_mut(CHUNK))
+            .zip(p.velocity.chunks_mut(CHUNK))
+            .zip(p.angular_velocity.chunks_mut(CHUNK))
+            .zip(p.position.chunks_mut(CHUNK))
+            .zip(wall_chunks)
+            .collect();
         let results: Vec<ChunkResult> = match team {
-            Some(team) => {
-                let items: Vec<ChunkRows> = p
-                    .force
-                    .chunks_mut(CHUNK)
-                    .zip(p.torque.chunks_mut(CHUNK))
-                    .zip(p.velocity.chunks_mut(CHUNK))
-                    .zip(p.angular_velocity.chunks_mut(CHUNK))
-                    .zip(p.position.chunks_mut(CHUNK))
-                    .zip(wall_chunks)
-                    .collect();
-                team.map(items, chunk)
-            }
+            Some(team) => team.map(items, chunk),
             None => self.pool.install(|| {
-                p.force
-                    .par_chunks_mut(CHUNK)
-                    .zip(p.torque.par_chunks_mut(CHUNK))
-                    .zip(p.velocity.par_chunks_mut(CHUNK))
-                    .zip(p.angular_velocity.par_chunks_mut(CHUNK))
-                    .zip(p.position.par_chunks_mut(CHUNK))
-                    .zip(wall_chunks.into_par_iter())
+                items
+                    .into_par_iter()
                     .enumerate()
                     .with_max_len(chunks_per_task())
                     .map(|(c, rows)| chunk(c, rows))
