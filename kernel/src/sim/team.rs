@@ -7,10 +7,10 @@
 //! two-thread run found 3,293 futex calls and 100,377 `sched_yield`s in 5,000 steps
 //! (BENCHMARKS.md, nineteenth sitting). OpenMP runtimes avoid that with an active wait:
 //! the team's threads spin between regions. [`Team`] is that, for the run loop only: the
-//! leader (the thread that runs the steps) posts each phase's work, every helper takes
-//! items of it from one counter, and between phases the helpers poll for the next phase
-//! and for rayon work (the neighbour rebuild stays on rayon), yielding the CPU to the
-//! operating system when they have polled long without finding any.
+//! leader (the thread that runs the steps) posts each phase's work, each helper that comes
+//! in time takes items of it (see [`Team::map`]), and between phases the helpers poll for
+//! the next phase and for rayon work (the neighbour rebuild stays on rayon), yielding the
+//! CPU to the operating system when they have polled long without finding any.
 //!
 //! Which thread computes an item never changes a bit: items own disjoint data, and their
 //! results come back in item order.
@@ -107,6 +107,8 @@ impl Team {
     /// rayon's work between them, until [`Team::release`].
     pub fn help(&self, thread: usize) {
         // Job numbers start at 1, so a helper that starts late still tries the current one.
+        // (A job it misses, even at the numbers' wrap after 2^32 jobs, costs only its help:
+        // the leader does whatever no helper takes.)
         let mut seen = 0;
         let mut idle = 0;
         loop {
