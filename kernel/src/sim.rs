@@ -28,7 +28,7 @@
 use crate::contact::{BondState, BondStatus, ContactModel};
 use crate::error::{KernelError, Result};
 use crate::factory::Factory;
-use crate::neighbor::schedule::Block;
+use crate::neighbor::schedule::{Block, MAX_BLOCKS};
 use crate::neighbor::{
     CHUNK, PairList, PairSchedule, WallContacts, build_wall_contacts, chunks_per_task,
 };
@@ -727,7 +727,10 @@ impl Simulation {
             // a futex wait on that lock about once a step (BENCHMARKS.md, twentieth sitting).
             let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
             let rows = c * CHUNK..c * CHUNK + fs.len();
-            let near: Vec<&Block> = schedule.blocks_touching(rows).collect();
+            // Sized for every block: grown from four (out of cell order a chunk touches
+            // more), it took glibc's arena lock in `realloc` on both threads at once.
+            let mut near: Vec<&Block> = Vec::with_capacity(MAX_BLOCKS);
+            near.extend(schedule.blocks_touching(rows));
             // Whether every kicked particle of the chunk passed the cheap test.
             let mut plausible_all = true;
             for k in 0..fs.len() {
