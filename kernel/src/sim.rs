@@ -42,7 +42,7 @@ use glam::DVec3;
 use pair_forces::{PartialSums, add_pair_forces};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
-use team::Team;
+use team::{Team, map_items};
 use wall_forces::{Body, WallList, WallRows, add_wall_forces};
 
 mod drift;
@@ -723,8 +723,8 @@ impl Simulation {
         // One chunk of particles: rows c * CHUNK.. of each array, and their wall rows.
         let chunk = |c: usize, (((((fs, ts), vs), ws), xs), mut mine): ChunkRows| -> ChunkResult {
             // Room for a particle's usual wall hits: growing it took glibc's arena lock
-            // (`realloc` bypasses the per-thread cache), and on two threads `strace` found
-            // a futex wait on that lock about once a step (BENCHMARKS.md, twentieth sitting).
+            // (`realloc` bypasses the per-thread cache) on both threads at once
+            // (BENCHMARKS.md, twentieth sitting).
             let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
             let rows = c * CHUNK..c * CHUNK + fs.len();
             // Sized for every block: grown from four (out of cell order a chunk touches
@@ -818,17 +818,7 @@ impl Simulation {
             .zip(p.position.chunks_mut(CHUNK))
             .zip(wall_chunks)
             .collect();
-        let results: Vec<ChunkResult> = match team {
-            Some(team) => team.map(items, chunk),
-            None => self.pool.install(|| {
-                items
-                    .into_par_iter()
-                    .enumerate()
-                    .with_max_len(chunks_per_task())
-                    .map(|(c, rows)| chunk(c, rows))
-                    .collect()
-            }),
-        };
+        let results: Vec<ChunkResult> = self.pool.install(|| map_items(team, items, chunk));
         let failure = results.iter().find_map(|r| match r {
             ChunkResult::Checked(f) => *f,
             ChunkResult::Passed(_) => None,

@@ -2,14 +2,13 @@
 //! both particles' partial sums as they are computed, block by block of the
 //! [`PairSchedule`] (see there why the sums come out the same on any number of threads).
 
-use super::team::Team;
+use super::team::{Team, map_items};
 use crate::contact::{Contact, ContactModel, ContactOut};
 use crate::neighbor::pairs::zeroed;
 use crate::neighbor::schedule::Block;
 use crate::neighbor::{PairList, PairSchedule};
 use crate::particles::Particles;
 use glam::DVec3;
-use rayon::prelude::*;
 
 /// Each block's partial sums of force and torque (see [`PairSchedule`]).
 #[derive(Debug, Default)]
@@ -69,17 +68,9 @@ pub(super) fn add_pair_forces(
         dt,
         time,
     };
-    match team {
-        Some(team) => team
-            .map(tasks, |_, (block, h, f, t)| ctx.block(block, h, f, t))
-            .into_iter()
-            .sum(),
-        None => tasks
-            .into_par_iter()
-            .with_max_len(1)
-            .map(|(block, h, f, t)| ctx.block(block, h, f, t))
-            .sum(),
-    }
+    map_items(team, tasks, |_, (block, h, f, t)| ctx.block(block, h, f, t))
+        .into_iter()
+        .sum()
 }
 
 /// What every block reads.

@@ -15,6 +15,8 @@
 //! Which thread computes an item never changes a bit: items own disjoint data, and their
 //! results come back in item order.
 
+use crate::neighbor::chunks_per_task;
+use rayon::prelude::*;
 use std::cell::UnsafeCell;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::Mutex;
@@ -241,6 +243,25 @@ impl Run {
                 Err(seen) => now = seen,
             }
         }
+    }
+}
+
+/// `f(k, items[k])` for every item, the results in item order: on `team` when there is
+/// one (within [`super::Simulation::run`]), otherwise as rayon tasks of the current pool,
+/// one item per task when several threads share it.
+pub(crate) fn map_items<T: Send, R: Send>(
+    team: Option<&Team>,
+    items: Vec<T>,
+    f: impl Fn(usize, T) -> R + Sync,
+) -> Vec<R> {
+    match team {
+        Some(team) => team.map(items, f),
+        None => items
+            .into_par_iter()
+            .enumerate()
+            .with_max_len(chunks_per_task())
+            .map(|(k, t)| f(k, t))
+            .collect(),
     }
 }
 
