@@ -913,6 +913,44 @@ impl Simulation {
         &self.pairs
     }
 
+    /// A diagnostic for measuring changes to the pair phase: runs it alone `reps` times on
+    /// the current state and returns the seconds they took. The contact history is put back
+    /// before each (untimed), so every repetition does the same work as this step's pair
+    /// phase; nothing else changes. Full runs vary by 5-10 % on a shared VM, these by about
+    /// 2 % (BENCHMARKS.md, twenty-first sitting).
+    pub fn time_pair_phase(&mut self, reps: usize) -> f64 {
+        let saved = self.pairs.history.clone();
+        let (p, model, pairs, schedule) = (
+            &self.particles,
+            &self.model,
+            &mut self.pairs,
+            &self.schedule,
+        );
+        let sums = &mut self.pair_sums;
+        let (dt, time) = (self.dt, self.time);
+        // One entry into the pool: entering it per repetition would time a thread handoff.
+        let seconds = self.pool.install(|| {
+            let mut seconds = 0.0;
+            for _ in 0..reps {
+                pairs.history.copy_from_slice(&saved);
+                let t = std::time::Instant::now();
+                std::hint::black_box(add_pair_forces(
+                    p,
+                    model,
+                    pairs,
+                    schedule,
+                    sums,
+                    (dt, time),
+                    None,
+                ));
+                seconds += t.elapsed().as_secs_f64();
+            }
+            seconds
+        });
+        self.pairs.history.copy_from_slice(&saved);
+        seconds
+    }
+
     /// Number of pairs in the neighbour list.
     pub fn pair_count(&self) -> usize {
         self.pairs.len()

@@ -222,3 +222,24 @@ fn pair_list_holds_every_contact_of_the_naive_search() {
         assert!(touching > 0 || s.step < 2000);
     }
 }
+
+/// The pair-phase timer (`tilth bench settling-bed --pair-phase-reps`) is a look, not a
+/// step: the run that follows it has the bits of a run without it.
+#[test]
+fn timing_the_pair_phase_changes_nothing() {
+    let mut timed = pile(1, 4e-4);
+    let mut plain = pile(1, 4e-4);
+    timed.run(6_000).unwrap();
+    plain.run(6_000).unwrap();
+    let (pairs, _) = timed.contact_counts();
+    assert!(
+        pairs > 100,
+        "only {pairs} pairs in contact: nothing to time"
+    );
+    let seconds = timed.time_pair_phase(5);
+    assert!(seconds > 0.0, "five pair phases took {seconds} s");
+    assert_eq!(timed.state_hash(), plain.state_hash());
+    timed.run(1_000).unwrap();
+    plain.run(1_000).unwrap();
+    assert_eq!(timed.state_hash(), plain.state_hash());
+}

@@ -56,6 +56,10 @@ pub struct SettlingBedArgs {
     /// Cohesion law.
     #[arg(long, value_enum, default_value_t = Cohesion::Jkr)]
     pub cohesion: Cohesion,
+    /// After the run, time the pair phase alone this many times on the final state, on one
+    /// thread (a diagnostic for comparing pair-phase code; BENCHMARKS.md).
+    #[arg(long, default_value_t = 0)]
+    pub pair_phase_reps: usize,
 }
 
 /// The settling bed's cohesion.
@@ -243,6 +247,16 @@ fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
         )?,
         None => writeln!(out, "peak RSS per particle: unknown (no /proc/self/status)")?,
     }
+    if args.pair_phase_reps > 0 {
+        let t = sim.time_pair_phase(args.pair_phase_reps) / args.pair_phase_reps as f64;
+        writeln!(
+            out,
+            "pair phase alone: {:.3} ms per step, {:.2} ns per listed pair, {:.2} ns per pair carrying force",
+            t * 1e3,
+            t * 1e9 / sim.pair_count().max(1) as f64,
+            t * 1e9 / touching.max(1) as f64
+        )?;
+    }
     writeln!(
         out,
         "particle-steps/s: {:.3e}",
@@ -270,6 +284,7 @@ mod tests {
             seed: 1,
             quiet: true,
             cohesion,
+            pair_phase_reps: 0,
         }
     }
 
