@@ -660,17 +660,8 @@ impl Simulation {
     ) -> (Option<(usize, Failure)>, Option<Drift>) {
         let mut laps = Laps::start();
         let dt = self.dt;
-        let time = self.time;
-        let (p, model, pairs, schedule) = (
-            &self.particles,
-            &self.model,
-            &mut self.pairs,
-            &self.schedule,
-        );
-        let sums = &mut self.pair_sums;
-        self.pairs_carrying = self
-            .pool
-            .install(|| add_pair_forces(p, model, pairs, schedule, sums, (dt, time), team));
+        let pool = self.pool.clone();
+        self.pairs_carrying = pool.install(|| self.pair_phase(team));
         self.times.pair += laps.lap();
 
         // Particle phase: each particle's sum (gravity, its share of each block's partial
@@ -920,6 +911,25 @@ impl Simulation {
     /// 2 % (BENCHMARKS.md, twenty-first sitting).
     pub fn time_pair_phase(&mut self, reps: usize) -> f64 {
         let saved = self.pairs.history.clone();
+        // One entry into the pool: entering it per repetition would time a thread handoff.
+        let pool = self.pool.clone();
+        let seconds = pool.install(|| {
+            let mut seconds = 0.0;
+            for _ in 0..reps {
+                self.pairs.history.copy_from_slice(&saved);
+                let t = std::time::Instant::now();
+                std::hint::black_box(self.pair_phase(None));
+                seconds += t.elapsed().as_secs_f64();
+            }
+            seconds
+        });
+        self.pairs.history.copy_from_slice(&saved);
+        seconds
+    }
+
+    /// The pair phase on this step's state (inside the pool, or on `team`): every listed
+    /// pair's forces into the blocks' partial sums. Returns the pairs carrying force.
+    fn pair_phase(&mut self, team: Option<&Team>) -> usize {
         let (p, model, pairs, schedule) = (
             &self.particles,
             &self.model,
@@ -927,28 +937,7 @@ impl Simulation {
             &self.schedule,
         );
         let sums = &mut self.pair_sums;
-        let (dt, time) = (self.dt, self.time);
-        // One entry into the pool: entering it per repetition would time a thread handoff.
-        let seconds = self.pool.install(|| {
-            let mut seconds = 0.0;
-            for _ in 0..reps {
-                pairs.history.copy_from_slice(&saved);
-                let t = std::time::Instant::now();
-                std::hint::black_box(add_pair_forces(
-                    p,
-                    model,
-                    pairs,
-                    schedule,
-                    sums,
-                    (dt, time),
-                    None,
-                ));
-                seconds += t.elapsed().as_secs_f64();
-            }
-            seconds
-        });
-        self.pairs.history.copy_from_slice(&saved);
-        seconds
+        add_pair_forces(p, model, pairs, schedule, sums, (self.dt, self.time), team)
     }
 
     /// Number of pairs in the neighbour list.

@@ -56,8 +56,8 @@ pub struct SettlingBedArgs {
     /// Cohesion law.
     #[arg(long, value_enum, default_value_t = Cohesion::Jkr)]
     pub cohesion: Cohesion,
-    /// After the run, time the pair phase alone this many times on the final state, on one
-    /// thread (a diagnostic for comparing pair-phase code; BENCHMARKS.md).
+    /// After the run, time the pair phase alone this many times on the final state, on the
+    /// run's threads (a diagnostic for comparing pair-phase code; BENCHMARKS.md).
     #[arg(long, default_value_t = 0)]
     pub pair_phase_reps: usize,
 }
