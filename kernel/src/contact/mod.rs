@@ -18,19 +18,29 @@
 //! file in [`laws`] and one line in its registry. Compatibility is checked once, in
 //! [`ContactModel::build`], never inside the time step.
 //!
+//! The pair phase runs the pipeline on [`LANES`] touching contacts at once
+//! ([`ContactModel::evaluate_lanes`]): each slot's trait has a lane form beside its scalar
+//! one, which must give the scalar form's bits lane by lane, and which by default runs the
+//! scalar form on each lane (see [`lanes`] and `kernel/ADDING_A_LAW.md`). Walls, bonds and
+//! contacts that may end run the scalar pipeline.
+//!
 //! Sign conventions: the unit normal `n` points from particle i to particle j (or the wall);
 //! the overlap `delta_n > 0` in contact; normal forces returned by laws are positive when
 //! repulsive; vectors returned are forces and torques *on i* unless stated.
 
+pub mod contact_lanes;
 pub mod geometry;
 #[macro_use]
 mod dispatch;
+pub mod lanes;
 pub mod laws;
 pub mod model;
 
+pub use contact_lanes::{ContactLanes, NormalForceLanes, with_lane_history};
 pub use geometry::Contact;
+pub use lanes::{F, LANES, M, V};
 pub use laws::{AnyBond, AnyDamping, AnyExtra, AnyNormal, AnyRolling, AnyTangential};
-pub use model::{BondStatus, ContactModel, ContactOut, ModelSpec, PairSpec};
+pub use model::{BondStatus, ContactModel, ContactOut, ContactOutLanes, ModelSpec, PairSpec};
 
 use crate::material::Material;
 use crate::param::{ParamSpec, Params};
@@ -60,6 +70,20 @@ pub trait NormalLaw: Send + Sync {
     fn reach(&self, _r_eff: f64) -> f64 {
         0.0
     }
+    /// [`NormalLaw::force`] on [`LANES`] contacts at once (see `lanes.rs`): it must give
+    /// `force`'s bits in every lane (`tests/tests/lanes.rs` checks each law). The default
+    /// runs `force` lane by lane; a law overrides it for speed.
+    #[inline(always)]
+    fn force_lanes(&self, c: &ContactLanes, history: &mut [F]) -> NormalForceLanes {
+        let mut out = NormalForceLanes::ZERO;
+        for k in 0..c.count {
+            out.set_lane(
+                k,
+                with_lane_history(history, k, |h| self.force(&c.lane(k), h)),
+            );
+        }
+        out
+    }
 }
 
 /// Slot 2: a viscous damping coefficient (N s/m) for a spring of `stiffness` acting on `m_eff`.
@@ -68,6 +92,16 @@ pub trait NormalLaw: Send + Sync {
 /// `laws/mod.rs` too.
 pub trait DampingLaw: Send + Sync {
     fn coefficient(&self, stiffness: f64, m_eff: f64) -> f64;
+    /// [`DampingLaw::coefficient`] lane by lane, with its bits (see
+    /// [`NormalLaw::force_lanes`]).
+    #[inline(always)]
+    fn coefficient_lanes(&self, stiffness: F, m_eff: F) -> F {
+        let mut out = F::ZERO;
+        for k in 0..LANES {
+            out.0[k] = self.coefficient(stiffness.0[k], m_eff.0[k]);
+        }
+        out
+    }
 }
 
 /// Slot 3: tangential (friction) force.
@@ -87,6 +121,35 @@ pub trait TangentialLaw: Send + Sync {
         damping: f64,
         history: &mut [f64],
     ) -> DVec3;
+    /// [`TangentialLaw::stiffness`] lane by lane, with its bits (see
+    /// [`NormalLaw::force_lanes`]).
+    #[inline(always)]
+    fn stiffness_lanes(&self, c: &ContactLanes, normal: &NormalForceLanes) -> F {
+        let mut out = F::ZERO;
+        for k in 0..c.count {
+            out.0[k] = self.stiffness(&c.lane(k), &normal.lane(k));
+        }
+        out
+    }
+    /// [`TangentialLaw::force`] lane by lane, with its bits (see
+    /// [`NormalLaw::force_lanes`]).
+    #[inline(always)]
+    fn force_lanes(
+        &self,
+        c: &ContactLanes,
+        coulomb_load: F,
+        stiffness: F,
+        damping: F,
+        history: &mut [F],
+    ) -> V {
+        let mut out = V::ZERO;
+        for k in 0..c.count {
+            let (load, s, eta) = (coulomb_load.0[k], stiffness.0[k], damping.0[k]);
+            let f = with_lane_history(history, k, |h| self.force(&c.lane(k), load, s, eta, h));
+            out.set_lane(k, f);
+        }
+        out
+    }
 }
 
 /// Slot 4: rolling resistance. Returns the torques on i and on j (N m).
@@ -101,6 +164,25 @@ pub trait RollingLaw: Send + Sync {
         coulomb_load: f64,
         history: &mut [f64],
     ) -> (DVec3, DVec3);
+    /// [`RollingLaw::torques`] lane by lane, with its bits (see
+    /// [`NormalLaw::force_lanes`]).
+    #[inline(always)]
+    fn torques_lanes(
+        &self,
+        c: &ContactLanes,
+        normal: &NormalForceLanes,
+        coulomb_load: F,
+        history: &mut [F],
+    ) -> (V, V) {
+        let (mut ti, mut tj) = (V::ZERO, V::ZERO);
+        for k in 0..c.count {
+            let (n, load) = (normal.lane(k), coulomb_load.0[k]);
+            let (a, b) = with_lane_history(history, k, |h| self.torques(&c.lane(k), &n, load, h));
+            ti.set_lane(k, a);
+            tj.set_lane(k, b);
+        }
+        (ti, tj)
+    }
 }
 
 /// Slot 5: an additive effect: a normal force (N, positive repulsive), possibly acting
@@ -132,6 +214,34 @@ pub trait ExtraLaw: Send + Sync {
     /// (a bridge whose volume comes from the grains' masses).
     fn reach_between(&self, c: &Contact) -> f64 {
         self.reach(c.r_eff)
+    }
+    /// [`ExtraLaw::force`] lane by lane, with its bits (see [`NormalLaw::force_lanes`]).
+    /// The pipeline calls it, then `torques_lanes`, as it calls `force`, then `torques`.
+    #[inline(always)]
+    fn force_lanes(&self, c: &ContactLanes, history: &mut [F]) -> F {
+        let mut out = F::ZERO;
+        for k in 0..c.count {
+            out.0[k] = with_lane_history(history, k, |h| self.force(&c.lane(k), h));
+        }
+        out
+    }
+    /// [`ExtraLaw::torques`] lane by lane, with its bits (see [`NormalLaw::force_lanes`]).
+    #[inline(always)]
+    fn torques_lanes(
+        &self,
+        c: &ContactLanes,
+        normal: &NormalForceLanes,
+        coulomb_load: F,
+        history: &mut [F],
+    ) -> (V, V) {
+        let (mut ti, mut tj) = (V::ZERO, V::ZERO);
+        for k in 0..c.count {
+            let (n, load) = (normal.lane(k), coulomb_load.0[k]);
+            let (a, b) = with_lane_history(history, k, |h| self.torques(&c.lane(k), &n, load, h));
+            ti.set_lane(k, a);
+            tj.set_lane(k, b);
+        }
+        (ti, tj)
     }
 }
 

@@ -16,7 +16,10 @@
 //! assert!((t - DVec3::new(0.0, -0.15 * 2.0 * 1e-3, 0.0)).length() < 1e-18);
 //! ```
 
-use crate::contact::{BuiltLaw, Contact, LawEntry, LawInput, NormalForce, RollingLaw, Slot};
+use crate::contact::{
+    BuiltLaw, Contact, ContactLanes, F, LawEntry, LawInput, NormalForce, NormalForceLanes,
+    RollingLaw, Slot, V,
+};
 use crate::param::{Bound, ParamSpec};
 use glam::DVec3;
 
@@ -50,6 +53,13 @@ pub fn cdt_torque(mu_r: f64, load: f64, arm: f64, omega: DVec3) -> DVec3 {
     if w == 0.0 { DVec3::ZERO } else { -mu_r * load * arm / w * omega }
 }
 
+/// [`cdt_torque`] lane by lane.
+#[inline(always)]
+fn cdt_torque_lanes(mu_r: f64, load: F, arm: F, omega: V) -> V {
+    let w = omega.length();
+    V::select(w.eq(F::ZERO), V::ZERO, (-mu_r * load * arm / w) * omega)
+}
+
 pub struct Cdt {
     mu_r: f64,
 }
@@ -60,5 +70,12 @@ impl RollingLaw for Cdt {
         let ti = cdt_torque(self.mu_r, load, c.arm_i, c.omega_i);
         let tj = if c.arm_j.is_finite() { cdt_torque(self.mu_r, load, c.arm_j, c.omega_j) } else { DVec3::ZERO };
         (ti, tj)
+    }
+
+    #[inline(always)]
+    fn torques_lanes(&self, c: &ContactLanes, _normal: &NormalForceLanes, load: F, _h: &mut [F]) -> (V, V) {
+        let ti = cdt_torque_lanes(self.mu_r, load, c.arm_i, c.omega_i);
+        let tj = cdt_torque_lanes(self.mu_r, load, c.arm_j, c.omega_j);
+        (ti, V::select(c.arm_j.is_finite(), tj, V::ZERO))
     }
 }

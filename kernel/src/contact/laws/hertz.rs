@@ -12,7 +12,10 @@
 //! assert!((f - 4.0 / 3.0 * 7.03125e6 * (5e-4f64).sqrt() * (1e-5f64).powf(1.5)).abs() < 1e-12);
 //! ```
 
-use crate::contact::{BuiltLaw, Contact, LawEntry, LawInput, NormalForce, NormalLaw, Slot};
+use crate::contact::{
+    BuiltLaw, Contact, ContactLanes, F, LawEntry, LawInput, NormalForce, NormalForceLanes,
+    NormalLaw, Slot,
+};
 
 pub const ENTRY: LawEntry = LawEntry {
     name: "hertz",
@@ -48,5 +51,19 @@ impl NormalLaw for Hertz {
         let stiffness = 2.0 * self.e_eff * a;
         let elastic = 2.0 / 3.0 * stiffness * c.overlap;
         NormalForce { elastic, stiffness, friction_load: elastic, contact_radius: a }
+    }
+
+    #[inline(always)]
+    fn force_lanes(&self, c: &ContactLanes, _history: &mut [F]) -> NormalForceLanes {
+        let a = (c.r_eff * c.overlap).sqrt();
+        let stiffness = 2.0 * self.e_eff * a;
+        let elastic = 2.0 / 3.0 * stiffness * c.overlap;
+        let off = c.overlap.le(F::ZERO);
+        NormalForceLanes {
+            elastic: F::select(off, F::ZERO, elastic),
+            stiffness: F::select(off, F::ZERO, stiffness),
+            friction_load: F::select(off, F::ZERO, elastic),
+            contact_radius: F::select(off, F::ZERO, a),
+        }
     }
 }

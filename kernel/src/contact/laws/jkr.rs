@@ -27,7 +27,8 @@
 //! assert!((f + 3.0 * std::f64::consts::PI * 0.356 * r).abs() < 1e-12);
 //! ```
 
-use crate::contact::{BuiltLaw, Contact, LawEntry, LawInput, NormalForce, NormalLaw, Slot};
+use crate::contact::{
+    ContactLanes, F, LANES, M, NormalForceLanes, with_lane_history,BuiltLaw, Contact, LawEntry, LawInput, NormalForce, NormalLaw, Slot};
 use crate::param::{Bound, ParamSpec};
 use std::f64::consts::PI;
 
@@ -152,5 +153,61 @@ impl NormalLaw for Jkr {
 
     fn reach(&self, r_eff: f64) -> f64 {
         -self.critical_overlap(r_eff)
+    }
+
+    /// Lanes with a negative overlap (a neck in tension, or none) go through `force` lane by
+    /// lane; the pair phase gives touching contacts only.
+    #[inline(always)]
+    fn force_lanes(&self, c: &ContactLanes, history: &mut [F]) -> NormalForceLanes {
+        let live = M(std::array::from_fn(|k| k < c.count));
+        if (c.overlap.le(F::ZERO) & live).any() {
+            let mut out = NormalForceLanes::ZERO;
+            for k in 0..c.count {
+                out.set_lane(k, with_lane_history(history, k, |h| self.force(&c.lane(k), h)));
+            }
+            return out;
+        }
+        let s = self.sqrt_contact_radius_lanes(c.overlap, c.r_eff, history[0]);
+        history[0] = s;
+        let a = s * s;
+        let hertz = 4.0 / 3.0 * self.e_eff * a * (c.overlap + self.c * s);
+        NormalForceLanes {
+            elastic: hertz - self.adhesion * a * s,
+            stiffness: 2.0 * self.e_eff * a,
+            friction_load: hertz,
+            contact_radius: a,
+        }
+    }
+}
+
+impl Jkr {
+    /// [`Jkr::sqrt_contact_radius`] lane by lane: each lane takes the Newton steps it would
+    /// take alone, and keeps its value once it stops.
+    #[inline(always)]
+    fn sqrt_contact_radius_lanes(&self, delta: F, r_eff: F, s_guess: F) -> F {
+        let cr = self.c * r_eff;
+        let dr = delta * r_eff;
+        let mut s = s_guess;
+        for k in 0..LANES {
+            let g = s_guess.0[k];
+            if !(g > 0.0 && 4.0 * g.powi(3) > cr.0[k] * 1.5) {
+                s.0[k] = cr.0[k].cbrt() + dr.0[k].abs().sqrt().sqrt();
+            }
+        }
+        let mut going = M::splat(true);
+        for _ in 0..60 {
+            let s3 = s * s * s;
+            let f = s3 * s - cr * s - dr;
+            let fp = 4.0 * s3 - cr;
+            going = going & !fp.le(F::ZERO);
+            let step = f / fp;
+            let next = s - step;
+            s = F::select(going, next, s);
+            going = going & !step.abs().le(1e-8 * next);
+            if !going.any() {
+                break;
+            }
+        }
+        s
     }
 }

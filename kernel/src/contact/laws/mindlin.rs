@@ -17,7 +17,11 @@
 //! assert!((tangential_stiffness(1.5625e6, (5e-4f64 * 1e-5).sqrt()) - 8.0 * 1.5625e6 * 7.0710678118654755e-5).abs() < 1e-6);
 //! ```
 
-use crate::contact::{BuiltLaw, Contact, LawEntry, LawInput, NormalForce, Slot, TangentialLaw};
+use crate::contact::contact_lanes::rotate_into_plane_lanes;
+use crate::contact::{
+    BuiltLaw, Contact, ContactLanes, F, LawEntry, LawInput, NormalForce, NormalForceLanes, Slot,
+    TangentialLaw, V,
+};
 use crate::param::{Bound, ParamSpec};
 use crate::contact::geometry::rotate_into_plane;
 use glam::DVec3;
@@ -82,5 +86,31 @@ impl TangentialLaw for Mindlin {
         h[1] = xi.y;
         h[2] = xi.z;
         f
+    }
+
+    #[inline(always)]
+    fn stiffness_lanes(&self, _c: &ContactLanes, normal: &NormalForceLanes) -> F {
+        8.0 * self.g_eff * normal.contact_radius
+    }
+
+    #[inline(always)]
+    fn force_lanes(&self, c: &ContactLanes, coulomb_load: F, s_t: F, eta_t: F, h: &mut [F]) -> V {
+        let n = c.normal;
+        let stored = V { x: h[0], y: h[1], z: h[2] };
+        let mut xi = rotate_into_plane_lanes(stored, n);
+        xi += c.v_t * c.dt;
+        let mut f = -s_t * xi - eta_t * c.v_t;
+        let cap = self.mu * coulomb_load;
+        let f2 = f.length_squared();
+        let slide = f2.gt(cap * cap);
+        let capped = f * (cap / f2.sqrt());
+        f = V::select(slide, capped, f);
+        xi = V::select(slide, -(capped + eta_t * c.v_t) / s_t, xi);
+        let off = s_t.le(F::ZERO);
+        xi = V::select(off, V::ZERO, xi);
+        h[0] = xi.x;
+        h[1] = xi.y;
+        h[2] = xi.z;
+        V::select(off, V::ZERO, f)
     }
 }

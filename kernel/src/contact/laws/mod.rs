@@ -4,8 +4,8 @@
 //! without `dyn` (see `contact/dispatch.rs`). See `kernel/ADDING_A_LAW.md`.
 
 use super::{
-    BondLaw, BondLoads, Contact, ContactOut, DampingLaw, ExtraLaw, LawEntry, NormalForce,
-    NormalLaw, RollingLaw, TangentialLaw,
+    BondLaw, BondLoads, Contact, ContactLanes, ContactOut, DampingLaw, ExtraLaw, F, LawEntry,
+    NormalForce, NormalForceLanes, NormalLaw, RollingLaw, TangentialLaw, V,
 };
 use glam::DVec3;
 
@@ -33,12 +33,14 @@ macro_rules! registry {
             AnyNormal: NormalLaw [$($nt($n::$nt))*] {
                 fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce;
                 fn reach(&self, r_eff: f64) -> f64;
+                fn force_lanes(&self, c: &ContactLanes, history: &mut [F]) -> NormalForceLanes;
             }
         );
         law_enum!(
             /// Any registered damping law.
             AnyDamping: DampingLaw [$($dt($d::$dt))*] {
                 fn coefficient(&self, stiffness: f64, m_eff: f64) -> f64;
+                fn coefficient_lanes(&self, stiffness: F, m_eff: F) -> F;
             }
         );
         law_enum!(
@@ -53,6 +55,15 @@ macro_rules! registry {
                     damping: f64,
                     history: &mut [f64]
                 ) -> DVec3;
+                fn stiffness_lanes(&self, c: &ContactLanes, normal: &NormalForceLanes) -> F;
+                fn force_lanes(
+                    &self,
+                    c: &ContactLanes,
+                    coulomb_load: F,
+                    stiffness: F,
+                    damping: F,
+                    history: &mut [F]
+                ) -> V;
             }
         );
         law_enum!(
@@ -65,6 +76,14 @@ macro_rules! registry {
                     coulomb_load: f64,
                     history: &mut [f64]
                 ) -> (DVec3, DVec3);
+
+                fn torques_lanes(
+                    &self,
+                    c: &ContactLanes,
+                    normal: &NormalForceLanes,
+                    coulomb_load: F,
+                    history: &mut [F]
+                ) -> (V, V);
             }
         );
         law_enum!(
@@ -80,6 +99,14 @@ macro_rules! registry {
                 ) -> (DVec3, DVec3);
                 fn reach(&self, r_eff: f64) -> f64;
                 fn reach_between(&self, c: &Contact) -> f64;
+                fn force_lanes(&self, c: &ContactLanes, history: &mut [F]) -> F;
+                fn torques_lanes(
+                    &self,
+                    c: &ContactLanes,
+                    normal: &NormalForceLanes,
+                    coulomb_load: F,
+                    history: &mut [F]
+                ) -> (V, V);
             }
         );
         law_enum!(

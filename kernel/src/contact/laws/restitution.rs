@@ -13,7 +13,7 @@
 //! assert_eq!(beta(1.0), 0.0);
 //! ```
 
-use crate::contact::{BuiltLaw, DampingLaw, LawEntry, LawInput, Slot};
+use crate::contact::{BuiltLaw, DampingLaw, F, LawEntry, LawInput, Slot};
 use crate::param::{Bound, ParamSpec};
 
 pub const RESTITUTION: ParamSpec = ParamSpec {
@@ -55,6 +55,11 @@ pub struct Restitution {
 impl DampingLaw for Restitution {
     #[inline]
     fn coefficient(&self, stiffness: f64, m_eff: f64) -> f64 {
+        self.factor * (stiffness * m_eff).sqrt()
+    }
+
+    #[inline(always)]
+    fn coefficient_lanes(&self, stiffness: F, m_eff: F) -> F {
         self.factor * (stiffness * m_eff).sqrt()
     }
 }

@@ -46,7 +46,9 @@
 //! assert_eq!(contact_area(r, r, -1e-6), 0.0);
 //! ```
 
-use crate::contact::{BuiltLaw, Contact, ExtraLaw, LawEntry, LawInput, Slot};
+use crate::contact::{
+    BuiltLaw, Contact, ContactLanes, ExtraLaw, F, LawEntry, LawInput, NormalForceLanes, Slot, V,
+};
 use crate::param::{Bound, ParamSpec};
 use std::f64::consts::PI;
 
@@ -103,5 +105,25 @@ impl ExtraLaw for Sjkr {
             return 0.0;
         }
         -self.k * contact_area(c.radius_i, c.radius_j, c.overlap)
+    }
+
+    #[inline(always)]
+    fn force_lanes(&self, c: &ContactLanes, _h: &mut [F]) -> F {
+        if self.k == 0.0 {
+            return F::ZERO;
+        }
+        let (r_i, r_j, overlap) = (c.radius_i, c.radius_j, c.overlap);
+        let d = r_i + r_j - overlap;
+        let spheres =
+            PI / 4.0 * overlap * (d + r_i - r_j) * (d - r_i + r_j) * (d + r_i + r_j) / (d * d);
+        let wall = PI * overlap * (2.0 * r_i - overlap);
+        let area = F::select(r_j.is_finite(), spheres, wall);
+        F::select(overlap.le(F::ZERO), F::ZERO, -self.k * area)
+    }
+
+    /// No torques (as the scalar default), without running it lane by lane.
+    #[inline(always)]
+    fn torques_lanes(&self, _c: &ContactLanes, _n: &NormalForceLanes, _load: F, _h: &mut [F]) -> (V, V) {
+        (V::ZERO, V::ZERO)
     }
 }
