@@ -39,6 +39,7 @@ use crate::timing::{Laps, PhaseTimes};
 use crate::wall::{Hit, Wall};
 use drift::{ChunkMotion, ChunkResult, Drift, kick_and_drift};
 use glam::DVec3;
+pub use pair_forces::PairPath;
 use pair_forces::{PartialSums, add_pair_forces};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -133,6 +134,8 @@ pub struct Simulation {
     pair_sums: PartialSums,
     /// Listed pairs that carried force in the last evaluation.
     pairs_carrying: usize,
+    /// How the pair phase evaluates touching contacts.
+    pair_path: PairPath,
     walls_near: WallContacts,
     ref_position: Vec<DVec3>,
     /// Each particle's half-step kick factors (dt/2 / m, dt/2 / I), computed by the same
@@ -338,6 +341,7 @@ impl Simulation {
             schedule: PairSchedule::default(),
             pair_sums: PartialSums::default(),
             pairs_carrying: 0,
+            pair_path: PairPath::default(),
             walls_near: WallContacts::empty(),
             ref_position: vec![],
             kick_factor: vec![],
@@ -937,7 +941,14 @@ impl Simulation {
             &self.schedule,
         );
         let sums = &mut self.pair_sums;
-        add_pair_forces(p, model, pairs, schedule, sums, (self.dt, self.time), team)
+        let times = (self.dt, self.time);
+        add_pair_forces(p, model, pairs, schedule, sums, times, self.pair_path, team)
+    }
+
+    /// How the pair phase evaluates touching contacts: [`crate::contact::LANES`] at a time
+    /// through the laws' lane forms (the default), or one at a time (see [`PairPath`]).
+    pub fn set_pair_path(&mut self, path: PairPath) {
+        self.pair_path = path;
     }
 
     /// Number of pairs in the neighbour list.

@@ -14,6 +14,9 @@ use glam::DVec3;
 use std::collections::BTreeMap;
 use std::ops::Range;
 
+mod lanes;
+pub use lanes::ContactOutLanes;
+
 /// Which law fills each slot (names from the registry). `damping`, `tangential` and
 /// `rolling` may be left empty (no damping, frictionless, no rolling resistance).
 #[derive(Debug, Clone, PartialEq, Default)]

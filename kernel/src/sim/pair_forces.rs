@@ -10,6 +10,23 @@ use crate::neighbor::{PairList, PairSchedule};
 use crate::particles::Particles;
 use glam::DVec3;
 
+mod lanes;
+
+/// How the pair phase evaluates touching contacts. Every path gives the same bits; the
+/// choice is there to show it, and to time one against another.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PairPath {
+    /// In lanes, on the widest vector instructions the CPU has (the default).
+    #[default]
+    Lanes,
+    /// In lanes, on AVX2 at most (as on CPUs without AVX-512).
+    LanesAvx2,
+    /// In lanes, on the instructions every x86-64 CPU has (SSE2).
+    LanesBaseline,
+    /// One contact at a time through the laws' scalar forms.
+    OneByOne,
+}
+
 /// Each block's partial sums of force and torque (see [`PairSchedule`]).
 #[derive(Debug, Default)]
 pub(super) struct PartialSums {
@@ -20,6 +37,7 @@ pub(super) struct PartialSums {
 /// Evaluates every listed pair and adds its force and torques, on both particles, to the
 /// partial sums of its block. Returns how many pairs carry force. Run inside the
 /// simulation's thread pool, or on `team`.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn add_pair_forces(
     p: &Particles,
     model: &ContactModel,
@@ -27,6 +45,7 @@ pub(super) fn add_pair_forces(
     schedule: &PairSchedule,
     sums: &mut PartialSums,
     (dt, time): (f64, f64),
+    path: PairPath,
     team: Option<&Team>,
 ) -> usize {
     let PairList {
@@ -68,9 +87,18 @@ pub(super) fn add_pair_forces(
         dt,
         time,
     };
-    map_items(team, tasks, |_, (block, h, f, t)| ctx.block(block, h, f, t))
-        .into_iter()
-        .sum()
+    // Bonds are evaluated by the scalar pipeline only.
+    let path = if model.has_bond() {
+        PairPath::OneByOne
+    } else {
+        path
+    };
+    map_items(team, tasks, |_, (block, h, f, t)| match path {
+        PairPath::OneByOne => ctx.block(block, h, f, t),
+        lanes => ctx.block_lanes(lanes, block, h, f, t),
+    })
+    .into_iter()
+    .sum()
 }
 
 /// What every block reads.

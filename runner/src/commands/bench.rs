@@ -26,7 +26,7 @@ use tilth_kernel::contact::{ContactModel, ModelSpec, PairSpec};
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::material::Material;
 use tilth_kernel::particles::Particles;
-use tilth_kernel::sim::{Aabb, Setup, Simulation};
+use tilth_kernel::sim::{Aabb, PairPath, Setup, Simulation};
 use tilth_kernel::wall::plane::Plane;
 use tilth_kernel::wall::{Motion, Wall};
 
@@ -60,6 +60,34 @@ pub struct SettlingBedArgs {
     /// run's threads (a diagnostic for comparing pair-phase code; BENCHMARKS.md).
     #[arg(long, default_value_t = 0)]
     pub pair_phase_reps: usize,
+    /// How the pair phase evaluates touching contacts (every path gives the same bits; for
+    /// timing one against another).
+    #[arg(long, value_enum, default_value_t = PairPathArg::Lanes)]
+    pub pair_path: PairPathArg,
+}
+
+/// `--pair-path`: the kernel's [`PairPath`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PairPathArg {
+    /// 8 contacts at a time, on the widest vector instructions the CPU has.
+    Lanes,
+    /// 8 at a time, on AVX2 at most.
+    Avx2,
+    /// 8 at a time, on SSE2 (every x86-64 CPU).
+    Baseline,
+    /// One at a time, through the laws' scalar forms.
+    OneByOne,
+}
+
+impl From<PairPathArg> for PairPath {
+    fn from(p: PairPathArg) -> PairPath {
+        match p {
+            PairPathArg::Lanes => PairPath::Lanes,
+            PairPathArg::Avx2 => PairPath::LanesAvx2,
+            PairPathArg::Baseline => PairPath::LanesBaseline,
+            PairPathArg::OneByOne => PairPath::OneByOne,
+        }
+    }
 }
 
 /// The settling bed's cohesion.
@@ -186,6 +214,7 @@ pub fn settling_bed_setup(args: &SettlingBedArgs) -> Result<Setup> {
 fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
     let t0 = Instant::now();
     let mut sim = Simulation::new(settling_bed_setup(args)?)?;
+    sim.set_pair_path(args.pair_path.into());
     let setup = t0.elapsed().as_secs_f64();
     let n = sim.particles.len();
     eprintln!(
@@ -285,6 +314,7 @@ mod tests {
             quiet: true,
             cohesion,
             pair_phase_reps: 0,
+            pair_path: PairPathArg::Lanes,
         }
     }
 

@@ -1,0 +1,257 @@
+//! The pair phase in lanes: a block's touching pairs gathered [`LANES`] at a time and
+//! evaluated through the laws' lane forms ([`ContactModel::evaluate_lanes`]), each
+//! pair's output then added to the partial sums in list order, as the scalar loop adds it.
+//! A pair the lanes do not take (an established contact that no longer touches, which may
+//! end; coincident centres) goes through the scalar pipeline between two batches, so the
+//! sums see every pair in list order and come out with the scalar loop's bits.
+//!
+//! The body is compiled once per instruction set (AVX-512, AVX2, the baseline) and the
+//! CPU's best is picked at run time: the lane loops become vector instructions of the
+//! width the CPU has. IEEE operations give the same bits on each.
+
+use super::{Ctx, PairPath, pair_force};
+use crate::contact::lanes::{F, LANES};
+use crate::contact::model::ACTIVE;
+use crate::contact::{ContactLanes, contact_lanes::SpheresLanes};
+use crate::neighbor::schedule::Block;
+use glam::DVec3;
+
+/// Up to [`LANES`] pairs waiting for evaluation: their list positions and material pair,
+/// and room for their bodies (kept: filled afresh for each batch, not zeroed).
+struct Batch {
+    k: [usize; LANES],
+    count: usize,
+    materials: (usize, usize),
+    spheres: SpheresLanes,
+}
+
+thread_local! {
+    /// Each thread's list of a block's candidate pairs, kept from block to block: a block's
+    /// is too large for the allocator's per-thread cache, and two threads allocating it at
+    /// once would wait on its lock (BENCHMARKS.md, twentieth sitting).
+    static CANDIDATES: std::cell::Cell<Vec<u32>> = const { std::cell::Cell::new(Vec::new()) };
+}
+
+impl Ctx<'_> {
+    /// [`Ctx::block`] through the lanes, on the widest vector instructions the CPU has that
+    /// `path` allows.
+    pub(super) fn block_lanes(
+        &self,
+        path: PairPath,
+        block: &Block,
+        history: &mut [f64],
+        force: &mut [DVec3],
+        torque: &mut [DVec3],
+    ) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let avx512 = path == PairPath::Lanes;
+            let avx2 = matches!(path, PairPath::Lanes | PairPath::LanesAvx2);
+            if avx512 && std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has the features the function is compiled for.
+                return unsafe { self.block_lanes_avx512(block, history, force, torque) };
+            }
+            if avx2 && std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: as above.
+                return unsafe { self.block_lanes_avx2(block, history, force, torque) };
+            }
+        }
+        self.block_lanes_body(block, history, force, torque)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,avx")]
+    unsafe fn block_lanes_avx512(
+        &self,
+        block: &Block,
+        history: &mut [f64],
+        force: &mut [DVec3],
+        torque: &mut [DVec3],
+    ) -> usize {
+        self.block_lanes_body(block, history, force, torque)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx")]
+    unsafe fn block_lanes_avx2(
+        &self,
+        block: &Block,
+        history: &mut [f64],
+        force: &mut [DVec3],
+        torque: &mut [DVec3],
+    ) -> usize {
+        self.block_lanes_body(block, history, force, torque)
+    }
+
+    /// Inlined into each instruction set's copy above.
+    #[inline(always)]
+    fn block_lanes_body(
+        &self,
+        block: &Block,
+        history: &mut [f64],
+        force: &mut [DVec3],
+        torque: &mut [DVec3],
+    ) -> usize {
+        force.fill(DVec3::ZERO);
+        torque.fill(DVec3::ZERO);
+        let p = self.p;
+        let (lo, stride) = (block.touch.start, self.stride);
+        let base = self.row_start[block.rows.start] as usize;
+        let end = self.row_start[block.rows.end] as usize;
+        let mut candidates = CANDIDATES.take();
+        candidates.clear();
+        candidates.resize(end - base, 0);
+        // First the pairs that may interact, without a branch: whether a listed pair does is
+        // close to a coin toss, which the branch predictor loses. The scalar loop's test
+        // (a model with bonds does not come here), negated as written there, NaN included.
+        let mut n = 0;
+        for k in base..end {
+            let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
+            let d = p.position[j] - p.position[i];
+            let rsum = p.radius[i] + p.radius[j];
+            // `&`, not `&&`: both sides are cheap, and a second branch would be mispredicted.
+            let skip = (history[(k - base) * stride + ACTIVE] == 0.0)
+                & (d.length_squared() >= rsum * rsum);
+            candidates[n] = (k - base) as u32;
+            n += !skip as usize;
+        }
+        let mut carrying = 0;
+        let mut lanes_history = vec![F::ZERO; stride];
+        let mut batch = Batch {
+            k: [0; LANES],
+            count: 0,
+            materials: (0, 0),
+            spheres: SpheresLanes::ZERO,
+        };
+        for &kk in &candidates[..n] {
+            let k = base + kk as usize;
+            let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
+            let at = kk as usize * stride;
+            let d = p.position[j] - p.position[i];
+            let dist = d.length_squared().sqrt();
+            // As `Contact` computes it.
+            let overlap = p.radius[i] + p.radius[j] - dist;
+            let materials = (p.material[i] as usize, p.material[j] as usize);
+            if overlap > 0.0 && dist != 0.0 {
+                if batch.count > 0 && batch.materials != materials {
+                    carrying += self.flush(
+                        &mut batch,
+                        base,
+                        history,
+                        &mut lanes_history,
+                        force,
+                        torque,
+                        lo,
+                    );
+                }
+                batch.materials = materials;
+                batch.k[batch.count] = k;
+                batch.count += 1;
+                if batch.count == LANES {
+                    carrying += self.flush(
+                        &mut batch,
+                        base,
+                        history,
+                        &mut lanes_history,
+                        force,
+                        torque,
+                        lo,
+                    );
+                }
+                continue;
+            }
+            carrying += self.flush(
+                &mut batch,
+                base,
+                history,
+                &mut lanes_history,
+                force,
+                torque,
+                lo,
+            );
+            let h = &mut history[at..at + stride];
+            if let Some(o) = pair_force(p, self.model, i, j, h, self.dt, self.time) {
+                force[i - lo] += o.force;
+                torque[i - lo] += o.torque_i;
+                force[j - lo] -= o.force;
+                torque[j - lo] += o.torque_j;
+                carrying += (o.force != DVec3::ZERO) as usize;
+            }
+        }
+        carrying += self.flush(
+            &mut batch,
+            base,
+            history,
+            &mut lanes_history,
+            force,
+            torque,
+            lo,
+        );
+        CANDIDATES.set(candidates);
+        carrying
+    }
+
+    /// Evaluates the batch's pairs and adds their outputs to the partial sums in list
+    /// order; empties the batch. Returns the pairs carrying force.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn flush(
+        &self,
+        batch: &mut Batch,
+        base: usize,
+        history: &mut [f64],
+        lanes_history: &mut [F],
+        force: &mut [DVec3],
+        torque: &mut [DVec3],
+        lo: usize,
+    ) -> usize {
+        let count = batch.count;
+        if count == 0 {
+            return 0;
+        }
+        batch.count = 0;
+        let p = self.p;
+        let stride = self.stride;
+        let s = &mut batch.spheres;
+        // Lanes past `count` repeat lane 0: finite values whose results are dropped.
+        for l in 0..LANES {
+            let k = batch.k[if l < count { l } else { 0 }];
+            let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
+            let d = p.position[j] - p.position[i];
+            s.d.set_lane(l, d);
+            s.dist.0[l] = d.length_squared().sqrt();
+            (s.r.0.0[l], s.r.1.0[l]) = (p.radius[i], p.radius[j]);
+            (s.m.0.0[l], s.m.1.0[l]) = (p.mass[i], p.mass[j]);
+            (s.inertia.0.0[l], s.inertia.1.0[l]) = (p.inertia[i], p.inertia[j]);
+            s.v.0.set_lane(l, p.velocity[i]);
+            s.v.1.set_lane(l, p.velocity[j]);
+            s.w.0.set_lane(l, p.angular_velocity[i]);
+            s.w.1.set_lane(l, p.angular_velocity[j]);
+            let at = (k - base) * stride;
+            for (v, h) in lanes_history.iter_mut().enumerate() {
+                h.0[l] = history[at + v];
+            }
+        }
+        let c = ContactLanes::between_spheres(s, self.dt, count);
+        let (a, b) = batch.materials;
+        let Some(out) = self.model.evaluate_lanes(a, b, &c, lanes_history) else {
+            return 0;
+        };
+        let mut carrying = 0;
+        for l in 0..count {
+            let k = batch.k[l];
+            let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
+            let at = (k - base) * stride;
+            for (v, h) in lanes_history.iter().enumerate() {
+                history[at + v] = h.0[l];
+            }
+            let f = out.force.lane(l);
+            force[i - lo] += f;
+            torque[i - lo] += out.torque_i.lane(l);
+            force[j - lo] -= f;
+            torque[j - lo] += out.torque_j.lane(l);
+            carrying += (f != DVec3::ZERO) as usize;
+        }
+        carrying
+    }
+}
