@@ -4,15 +4,21 @@
 mod common;
 use common::*;
 use glam::DVec3;
+use tilth_kernel::contact::ContactModel;
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::particles::Particles;
-use tilth_kernel::sim::{Aabb, Setup, Simulation};
+use tilth_kernel::sim::{Aabb, PairPath, Setup, Simulation};
 use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric};
 
 /// A funnel-fed pile with every law family: JKR, Mindlin, EPSD, walls of three kinds and a
 /// factory, 2,500 particles (several parallel chunks).
 fn pile(threads: usize, skin: f64) -> Simulation {
-    let m = model(
+    pile_with(jkr_epsd(), threads, skin)
+}
+
+/// JKR, Mindlin and EPSD: the pile's laws.
+fn jkr_epsd() -> ContactModel {
+    model(
         &spec("jkr", Some("restitution"), Some("mindlin"), Some("epsd")),
         &[
             ("restitution", 0.45),
@@ -20,7 +26,26 @@ fn pile(threads: usize, skin: f64) -> Simulation {
             ("rolling_friction", 0.15),
             ("surface_energy", 0.356),
         ],
-    );
+    )
+}
+
+/// Hertz, Mindlin, CDT and SJKR: the LIGGGHTS settling bed's laws.
+fn hertz_sjkr() -> ContactModel {
+    let mut s = spec("hertz", Some("restitution"), Some("mindlin"), Some("cdt"));
+    s.extra = vec!["sjkr".into()];
+    model(
+        &s,
+        &[
+            ("restitution", 0.45),
+            ("friction", 0.6),
+            ("rolling_friction", 0.15),
+            ("cohesion_energy_density", 0.356),
+        ],
+    )
+}
+
+/// [`pile`] with the contact model `m`.
+fn pile_with(m: ContactModel, threads: usize, skin: f64) -> Simulation {
     let walls = vec![
         floor(),
         Wall::new(
@@ -242,4 +267,52 @@ fn timing_the_pair_phase_changes_nothing() {
     timed.run(1_000).unwrap();
     plain.run(1_000).unwrap();
     assert_eq!(timed.state_hash(), plain.state_hash());
+}
+
+/// The pair phase evaluates touching contacts in lanes, on AVX-512, AVX2 or SSE2, or one at
+/// a time: the same bits, through the pour's new contacts, ending contacts, reorders and
+/// rebuilds, with laws whose lane forms run their scalar forms (JKR, EPSD) and laws with
+/// lane forms of their own (the settling bed's Hertz, Mindlin, CDT, SJKR), on 1 and 2
+/// threads. (On a CPU without AVX-512 or AVX2, those paths fall back to the next one.)
+#[test]
+fn contacts_in_lanes_give_the_bits_of_one_at_a_time() {
+    let paths = [
+        (PairPath::Lanes, 2),
+        (PairPath::LanesAvx2, 1),
+        (PairPath::LanesBaseline, 2),
+        (PairPath::OneByOne, 1),
+    ];
+    for (name, m) in [
+        ("jkr", jkr_epsd as fn() -> ContactModel),
+        ("sjkr", hertz_sjkr),
+    ] {
+        let mut runs: Vec<Simulation> = paths
+            .iter()
+            .map(|&(path, threads)| {
+                let mut s = pile_with(m(), threads, 4e-4);
+                s.set_pair_path(path);
+                s
+            })
+            .collect();
+        for _ in 0..8 {
+            for s in &mut runs {
+                s.run(2_000).unwrap();
+            }
+            for (s, (path, _)) in runs.iter().zip(&paths).skip(1) {
+                assert_eq!(
+                    s.state_hash(),
+                    runs[0].state_hash(),
+                    "{name}: {path:?} differs from {:?} at step {}",
+                    paths[0].0,
+                    s.step
+                );
+            }
+        }
+        // The pour reached the floor: contacts formed, ended and carried load.
+        let (pairs, walls) = runs[0].contact_counts();
+        assert!(
+            pairs > 100 && walls > 10,
+            "{name}: pairs {pairs}, wall contacts {walls}"
+        );
+    }
 }
