@@ -28,7 +28,6 @@
 use crate::contact::{BondState, BondStatus, ContactModel};
 use crate::error::{KernelError, Result};
 use crate::factory::Factory;
-use crate::neighbor::schedule::{Block, MAX_BLOCKS};
 use crate::neighbor::{
     CHUNK, PairList, PairSchedule, WallContacts, build_wall_contacts, chunks_per_task,
 };
@@ -40,7 +39,7 @@ use crate::wall::{Hit, Wall};
 use drift::{ChunkMotion, ChunkResult, Drift, kick_and_drift};
 use glam::DVec3;
 pub use pair_forces::PairPath;
-use pair_forces::{PartialSums, add_pair_forces};
+use pair_forces::{PartialSums, SumRows, add_pair_forces};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use team::{Team, map_items};
@@ -51,16 +50,20 @@ mod pair_forces;
 mod team;
 mod wall_forces;
 
-/// One particle-phase task's rows: force, torque, velocity, spin, position, wall contacts.
-type ChunkRows<'a> = (
+/// One particle-phase task's rows: force, torque, velocity, spin, position, wall contacts,
+/// and the blocks' partial sums of its particles.
+type ChunkRows<'a, 's> = (
     (
         (
-            ((&'a mut [DVec3], &'a mut [DVec3]), &'a mut [DVec3]),
+            (
+                ((&'a mut [DVec3], &'a mut [DVec3]), &'a mut [DVec3]),
+                &'a mut [DVec3],
+            ),
             &'a mut [DVec3],
         ),
-        &'a mut [DVec3],
+        WallRows<'a>,
     ),
-    WallRows<'a>,
+    &'s mut [SumRows<'a>],
 );
 
 /// Steps between spatial reorderings of the particles (cell order, for cache locality; as
@@ -671,7 +674,6 @@ impl Simulation {
         // Particle phase: each particle's sum (gravity, its share of each block's partial
         // sums in block order, its walls), then the second half kick and the checks.
         let gravity = self.gravity;
-        let (schedule, sums) = (&self.schedule, &self.pair_sums);
         let model = &self.model;
         let stride = self.pairs.stride;
         let walls = &self.walls;
@@ -716,27 +718,23 @@ impl Simulation {
         let drift_next = drift_next && kick;
         let ref_position = &self.ref_position;
         // One chunk of particles: rows c * CHUNK.. of each array, and their wall rows.
-        let chunk = |c: usize, (((((fs, ts), vs), ws), xs), mut mine): ChunkRows| -> ChunkResult {
+        let chunk = |c: usize,
+                     ((((((fs, ts), vs), ws), xs), mut mine), block_sums): ChunkRows|
+         -> ChunkResult {
             // Room for a particle's usual wall hits: growing it took glibc's arena lock
             // (`realloc` bypasses the per-thread cache) on both threads at once
             // (BENCHMARKS.md, twentieth sitting).
             let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
-            let rows = c * CHUNK..c * CHUNK + fs.len();
-            // Sized for every block: grown from four (out of cell order a chunk touches
-            // more), it took glibc's arena lock in `realloc` on both threads at once.
-            let mut near: Vec<&Block> = Vec::with_capacity(MAX_BLOCKS);
-            near.extend(schedule.blocks_touching(rows));
             // Whether every kicked particle of the chunk passed the cheap test.
             let mut plausible_all = true;
             for k in 0..fs.len() {
                 let i = c * CHUNK + k;
                 let mut f = gravity * mass[i];
                 let mut t = DVec3::ZERO;
-                for b in &near {
-                    if b.touch.contains(&i) {
-                        let at = b.offset + i - b.touch.start;
-                        f += sums.force[at];
-                        t += sums.torque[at];
+                for b in block_sums.iter_mut() {
+                    if let Some((bf, bt)) = b.take(i) {
+                        f += bf;
+                        t += bt;
                     }
                 }
                 let (e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
@@ -804,6 +802,14 @@ impl Simulation {
             });
             ChunkResult::Checked(failed)
         };
+        let (mut sum_rows, bounds) = self.pair_sums.by_chunk(&self.schedule, n, CHUNK);
+        let mut block_sums = Vec::with_capacity(bounds.len());
+        let mut rest = &mut sum_rows[..];
+        for w in bounds.windows(2) {
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(w[1] - w[0]);
+            block_sums.push(mine);
+            rest = tail;
+        }
         let items: Vec<ChunkRows> = p
             .force
             .chunks_mut(CHUNK)
@@ -812,6 +818,7 @@ impl Simulation {
             .zip(p.angular_velocity.chunks_mut(CHUNK))
             .zip(p.position.chunks_mut(CHUNK))
             .zip(wall_chunks)
+            .zip(block_sums)
             .collect();
         let results: Vec<ChunkResult> = self.pool.install(|| map_items(team, items, chunk));
         let failure = results.iter().find_map(|r| match r {
@@ -924,6 +931,9 @@ impl Simulation {
                 let t = std::time::Instant::now();
                 std::hint::black_box(self.pair_phase(None));
                 seconds += t.elapsed().as_secs_f64();
+                // As the particle phase leaves them (untimed: it takes them as it reads them).
+                self.pair_sums.force.fill(DVec3::ZERO);
+                self.pair_sums.torque.fill(DVec3::ZERO);
             }
             seconds
         });

@@ -27,11 +27,86 @@ pub enum PairPath {
     OneByOne,
 }
 
-/// Each block's partial sums of force and torque (see [`PairSchedule`]).
+/// Each block's partial sums of force and torque (see [`PairSchedule`]). Zero between
+/// steps: the particle phase takes each sum as it adds it ([`PartialSums::by_chunk`]), so
+/// the pair phase adds to them without zeroing them first (a pass over 96 bytes per
+/// particle that took 4-5 % of a settling-bed run; BENCHMARKS.md, twenty-third sitting).
 #[derive(Debug, Default)]
 pub(super) struct PartialSums {
     pub force: Vec<DVec3>,
     pub torque: Vec<DVec3>,
+}
+
+/// The partial sums of one block for particles `start..start + force.len()`, lent to the
+/// particle-phase chunk holding those particles.
+pub(super) struct SumRows<'a> {
+    pub start: usize,
+    pub force: &'a mut [DVec3],
+    pub torque: &'a mut [DVec3],
+}
+
+impl SumRows<'_> {
+    /// Particle `i`'s sums, if these rows hold it, left zero.
+    #[inline]
+    pub fn take(&mut self, i: usize) -> Option<(DVec3, DVec3)> {
+        let at = i.wrapping_sub(self.start);
+        (at < self.force.len()).then(|| {
+            (
+                std::mem::take(&mut self.force[at]),
+                std::mem::take(&mut self.torque[at]),
+            )
+        })
+    }
+}
+
+impl PartialSums {
+    /// The sums cut for chunks of `chunk` particles out of `n`: every block's rows for
+    /// chunk c, in block order, are `rows[bounds[c]..bounds[c + 1]]`.
+    pub fn by_chunk(
+        &mut self,
+        schedule: &PairSchedule,
+        n: usize,
+        chunk: usize,
+    ) -> (Vec<SumRows<'_>>, Vec<usize>) {
+        // What is left of each block's sums: the particles below the current chunk are cut off.
+        let mut rest: Vec<SumRows> = Vec::with_capacity(schedule.blocks.len());
+        let (mut f, mut t) = (&mut self.force[..], &mut self.torque[..]);
+        for b in &schedule.blocks {
+            let (bf, tail) = std::mem::take(&mut f).split_at_mut(b.touch.len());
+            f = tail;
+            let (bt, tail) = std::mem::take(&mut t).split_at_mut(b.touch.len());
+            t = tail;
+            rest.push(SumRows {
+                start: b.touch.start,
+                force: bf,
+                torque: bt,
+            });
+        }
+        let chunks = n.div_ceil(chunk);
+        let mut rows = Vec::with_capacity(2 * chunks + rest.len());
+        let mut bounds = Vec::with_capacity(chunks + 1);
+        bounds.push(0);
+        for c in 0..chunks {
+            let end = ((c + 1) * chunk).min(n);
+            for r in &mut rest {
+                if r.start < end && !r.force.is_empty() {
+                    let len = (end - r.start).min(r.force.len());
+                    let (f, tail) = std::mem::take(&mut r.force).split_at_mut(len);
+                    r.force = tail;
+                    let (t, tail) = std::mem::take(&mut r.torque).split_at_mut(len);
+                    r.torque = tail;
+                    rows.push(SumRows {
+                        start: r.start,
+                        force: f,
+                        torque: t,
+                    });
+                    r.start += len;
+                }
+            }
+            bounds.push(rows.len());
+        }
+        (rows, bounds)
+    }
 }
 
 /// Evaluates every listed pair and adds its force and torques, on both particles, to the
@@ -57,12 +132,18 @@ pub(super) fn add_pair_forces(
         ..
     } = pairs;
     let stride = *stride;
-    // Sized at a new schedule only (each block zeroes its own sums below), with an eighth
-    // to spare rather than doubling: at 100,000 particles they are 10 MB.
+    // Sized at a new schedule only, with an eighth to spare rather than doubling: at
+    // 100,000 particles they are 10 MB. Zero, as the last particle phase left them.
     if sums.force.len() != schedule.sums_len {
         zeroed(&mut sums.force, schedule.sums_len);
         zeroed(&mut sums.torque, schedule.sums_len);
     }
+    debug_assert!(
+        sums.force
+            .iter()
+            .chain(&sums.torque)
+            .all(|&s| s == DVec3::ZERO)
+    );
     // Each block's history rows and partial sums (both in block order).
     let mut tasks = Vec::with_capacity(schedule.blocks.len());
     let (mut h_rest, mut f_rest, mut t_rest) =
@@ -115,7 +196,7 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     /// One block's pairs in list order; `force` and `torque` are the block's partial sums
-    /// (of particles `block.touch`), `history` its history rows. Returns the pairs carrying
+    /// (of particles `block.touch`, zero on entry), `history` its history rows. Returns the pairs carrying
     /// force.
     fn block(
         &self,
@@ -124,8 +205,6 @@ impl Ctx<'_> {
         force: &mut [DVec3],
         torque: &mut [DVec3],
     ) -> usize {
-        force.fill(DVec3::ZERO);
-        torque.fill(DVec3::ZERO);
         let (lo, stride) = (block.touch.start, self.stride);
         let base = self.row_start[block.rows.start] as usize;
         let mut carrying = 0;

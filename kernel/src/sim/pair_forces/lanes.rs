@@ -92,8 +92,6 @@ impl Ctx<'_> {
         force: &mut [DVec3],
         torque: &mut [DVec3],
     ) -> usize {
-        force.fill(DVec3::ZERO);
-        torque.fill(DVec3::ZERO);
         let p = self.p;
         let (lo, stride) = (block.touch.start, self.stride);
         let base = self.row_start[block.rows.start] as usize;
