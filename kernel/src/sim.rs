@@ -140,6 +140,9 @@ pub struct Simulation {
     /// How the pair phase evaluates touching contacts.
     pair_path: PairPath,
     walls_near: WallContacts,
+    /// Each particle-phase chunk's share of every wall's force and torque (chunk-major),
+    /// summed over the chunks in order after the phase.
+    wall_shares: Vec<(DVec3, DVec3)>,
     ref_position: Vec<DVec3>,
     /// Each particle's half-step kick factors (dt/2 / m, dt/2 / I), computed by the same
     /// expressions the kicks would evaluate, so the bits are the same as dividing at each
@@ -346,6 +349,7 @@ impl Simulation {
             pairs_carrying: 0,
             pair_path: PairPath::default(),
             walls_near: WallContacts::empty(),
+            wall_shares: vec![],
             ref_position: vec![],
             kick_factor: vec![],
             wall_ref_offset: vec![DVec3::ZERO; nwalls],
@@ -581,19 +585,17 @@ impl Simulation {
         let model = &self.model;
         let bonded = self.bonded;
         let keep = |h: &[f64]| model.bond_intact(h);
-        let new_walls = self.pool.install(|| {
+        let (new_walls, schedule) = self.pool.install(|| {
             // Intact bonds keep their pairs in the list, however far they stretch.
             let keep: Option<&(dyn Fn(&[f64]) -> bool + Sync)> = bonded.then_some(&keep);
             pairs.rebuild_keeping(&p.position, &p.radius, &p.id, extra, order.as_deref(), keep);
-            build_wall_contacts(p, walls, old, extra, stride, order.as_deref())
+            let walls = build_wall_contacts(p, walls, old, extra, stride, order.as_deref());
+            let schedule =
+                PairSchedule::build(&pairs.row_start, &pairs.j, &pairs.history, pairs.stride);
+            (walls, schedule)
         });
         self.walls_near = new_walls;
-        self.schedule = PairSchedule::build(
-            &self.pairs.row_start,
-            &self.pairs.j,
-            &self.pairs.history,
-            self.pairs.stride,
-        );
+        self.schedule = schedule;
         self.ref_position.clone_from(&self.particles.position);
         for (r, w) in self.wall_ref_offset.iter_mut().zip(&self.walls) {
             *r = w.offset;
@@ -680,11 +682,15 @@ impl Simulation {
         let wc = &mut self.walls_near;
         let p = &mut self.particles;
         let n = p.len();
+        let nwalls = walls.len();
+        self.wall_shares
+            .resize(n.div_ceil(CHUNK) * nwalls, (DVec3::ZERO, DVec3::ZERO));
         // Split the wall-contact arrays at the chunk boundaries so each task owns its rows.
         let mut wall_chunks = vec![];
         {
             let (mut hist, mut force, mut point) =
                 (&mut wc.history[..], &mut wc.force[..], &mut wc.point[..]);
+            let mut shares = &mut self.wall_shares[..];
             let mut at = 0usize;
             for c in 0..n.div_ceil(CHUNK) {
                 let end = wc.start[((c + 1) * CHUNK).min(n)] as usize;
@@ -692,15 +698,18 @@ impl Simulation {
                 let (h1, h2) = hist.split_at_mut(len * stride);
                 let (f1, f2) = force.split_at_mut(len);
                 let (p1, p2) = point.split_at_mut(len);
+                let (s1, s2) = shares.split_at_mut(nwalls);
                 wall_chunks.push(WallRows {
                     base: at,
                     history: h1,
                     force: f1,
                     point: p1,
+                    shares: s1,
                 });
                 hist = h2;
                 force = f2;
                 point = p2;
+                shares = s2;
                 at = end;
             }
         }
@@ -773,6 +782,7 @@ impl Simulation {
                     plausible_all &= plausible_motion(v, w, limit2);
                 }
             }
+            mine.add_wall_shares(&list, walls);
             // The exact test only for a chunk the cheap one flagged: the first
             // failing particle in index order, as a test of each would find it.
             // A chunk it passes is where a failure cannot be (the cheap test is
@@ -834,19 +844,18 @@ impl Simulation {
             None => None,
         };
 
-        // Wall totals: the opposite of what the walls did to the particles, summed in order.
+        // Wall totals: the chunks' shares, in chunk order. Summing every contact here, one
+        // thread did what the chunks now do on all (BENCHMARKS.md, twenty-third sitting).
         for w in &mut self.walls {
             w.force = DVec3::ZERO;
             w.torque = DVec3::ZERO;
         }
-        let wc = &self.walls_near;
-        for e in 0..wc.wall.len() {
-            let f = wc.force[e];
-            if f != DVec3::ZERO {
-                let w = &mut self.walls[wc.wall[e] as usize];
-                let arm = wc.point[e] - (w.shape.reference_point() + w.offset);
-                w.force -= f;
-                w.torque += arm.cross(-f);
+        if nwalls > 0 {
+            for shares in self.wall_shares.chunks(nwalls) {
+                for (w, &(f, t)) in self.walls.iter_mut().zip(shares) {
+                    w.force += f;
+                    w.torque += t;
+                }
             }
         }
         // Each step's force acts for one step (the initial evaluation adds nothing).
@@ -1133,6 +1142,7 @@ impl Simulation {
             + self.kick_factor.capacity() * 16
             + (self.pair_sums.force.capacity() + self.pair_sums.torque.capacity()) * 24
             + self.walls_near.heap_bytes()
+            + self.wall_shares.capacity() * 48
             // A B-tree entry (two ids and a time) with its share of the node, roughly.
             + self.retired_bonds.len() * 24
     }

@@ -156,11 +156,13 @@ impl PairList {
             .collect();
 
         let total: usize = chunks.iter().map(|c| c.j.len()).sum();
-        // Refill the spare buffers; new pairs start from a zero history.
+        // Refill the spare buffers. The history is written row by row below (carried or
+        // zero), in parallel: zeroing it all here first was a serial pass over 64 bytes a
+        // pair while the other thread waited (BENCHMARKS.md, twenty-third sitting).
         room(&mut b.i, total);
         room(&mut b.j, total);
         room(&mut b.row_start, n + 1);
-        zeroed(&mut b.history, total * stride);
+        resized(&mut b.history, total * stride);
         let mut list = PairList {
             i: b.i,
             j: b.j,
@@ -215,9 +217,13 @@ impl PairList {
                                 old_row.clone().find(|&q| old.j[q] == oj)
                             }
                         };
-                        if let Some(q) = found {
-                            hist[(p - base) * stride..(p - base + 1) * stride]
-                                .copy_from_slice(&old.history[q * stride..(q + 1) * stride]);
+                        let row = &mut hist[(p - base) * stride..(p - base + 1) * stride];
+                        match found {
+                            Some(q) => {
+                                row.copy_from_slice(&old.history[q * stride..(q + 1) * stride])
+                            }
+                            // A new pair starts from a zero history.
+                            None => row.fill(0.0),
                         }
                     }
                 }
@@ -263,6 +269,17 @@ fn room<T>(v: &mut Vec<T>, len: usize) {
         *v = Vec::new();
         *v = Vec::with_capacity(len + len / 8);
     }
+}
+
+/// `v` holding `len` values, of no meaning: what it held before, zeros where it grew. For a
+/// buffer whose every value is written next; in place when it has the room, else as
+/// [`room`].
+fn resized<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
+    if v.capacity() < len {
+        room(v, len);
+    }
+    v.truncate(len);
+    v.resize(len, T::default());
 }
 
 /// [`room`], then `len` zeros.

@@ -14,7 +14,9 @@
 //! pass, which wrote and read 72 bytes per listed pair every step (BENCHMARKS.md,
 //! seventeenth sitting).
 
+use super::{CHUNK, chunks_per_task};
 use crate::contact::model::ACTIVE;
+use rayon::prelude::*;
 use std::ops::Range;
 
 /// Rows per block, at least: enough that a block's own rows outnumber the partners it
@@ -71,17 +73,26 @@ impl PairSchedule {
         stride: usize,
     ) -> PairSchedule {
         let n = row_start.len().saturating_sub(1);
-        let mut cum = Vec::with_capacity(n + 1);
-        cum.push(0usize);
+        // Each row's work in parallel (it reads every pair's history), then the running
+        // sum: serial, it kept the other thread waiting at every rebuild.
+        let mut cum = vec![0usize; n + 1];
+        cum[1..]
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .with_max_len(chunks_per_task())
+            .for_each(|(c, w)| {
+                for (r, w) in (c * CHUNK..).zip(w) {
+                    let pairs = row_start[r] as usize..row_start[r + 1] as usize;
+                    *w = 1
+                        + pairs.len()
+                        + CONTACT_WEIGHT
+                            * pairs
+                                .filter(|&k| history[k * stride + ACTIVE] != 0.0)
+                                .count();
+                }
+            });
         for r in 0..n {
-            let pairs = row_start[r] as usize..row_start[r + 1] as usize;
-            let w = 1
-                + pairs.len()
-                + CONTACT_WEIGHT
-                    * pairs
-                        .filter(|&k| history[k * stride + ACTIVE] != 0.0)
-                        .count();
-            cum.push(cum[r] + w);
+            cum[r + 1] += cum[r];
         }
         let mut count = n.div_ceil(MIN_BLOCK_ROWS).clamp(1, MAX_BLOCKS);
         loop {

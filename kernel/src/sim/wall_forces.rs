@@ -11,12 +11,32 @@ use glam::DVec3;
 use std::ops::Range;
 
 /// One task's rows of the wall-contact list: rows `base..base + force.len()` of the whole
-/// list, with their history (`stride` values a row), force and contact point.
+/// list, with their history (`stride` values a row), force and contact point; and the
+/// task's share of each wall's force and torque.
 pub(super) struct WallRows<'a> {
     pub base: usize,
     pub history: &'a mut [f64],
     pub force: &'a mut [DVec3],
     pub point: &'a mut [DVec3],
+    pub shares: &'a mut [(DVec3, DVec3)],
+}
+
+impl WallRows<'_> {
+    /// Sets each wall's share to the opposite of what it did to these rows' particles,
+    /// summed in row order: force, and torque about the wall's reference point.
+    pub fn add_wall_shares(&mut self, list: &WallList, walls: &[Wall]) {
+        self.shares.fill((DVec3::ZERO, DVec3::ZERO));
+        for (q, (&f, &point)) in self.force.iter().zip(self.point.iter()).enumerate() {
+            if f != DVec3::ZERO {
+                let w = list.wall[self.base + q] as usize;
+                let wall = &walls[w];
+                let arm = point - (wall.shape.reference_point() + wall.offset);
+                let share = &mut self.shares[w];
+                share.0 -= f;
+                share.1 += arm.cross(-f);
+            }
+        }
+    }
 }
 
 /// What a wall contact reads of its particle: position, radius, mass, inertia, material,
