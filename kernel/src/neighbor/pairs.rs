@@ -156,55 +156,48 @@ impl PairList {
             .collect();
 
         let total: usize = chunks.iter().map(|c| c.j.len()).sum();
-        // Refill the spare buffers. The history is written row by row below (carried or
-        // zero), in parallel: zeroing it all here first was a serial pass over 64 bytes a
-        // pair while the other thread waited (BENCHMARKS.md, twenty-third sitting).
-        room(&mut b.i, total);
-        room(&mut b.j, total);
-        room(&mut b.row_start, n + 1);
+        // Refill the spare buffers, every value of which the tasks below write, in parallel:
+        // joining the chunks' rows and zeroing the history first were serial passes while
+        // the other thread waited (BENCHMARKS.md, twenty-third sitting).
+        resized(&mut b.i, total);
+        resized(&mut b.j, total);
+        resized(&mut b.row_start, n + 1);
         resized(&mut b.history, total * stride);
-        let mut list = PairList {
-            i: b.i,
-            j: b.j,
-            row_start: b.row_start,
-            history: b.history,
-            stride,
-            spare: Buffers::default(),
-        };
-        list.row_start.push(0);
-        let mut row = 0u32;
-        for c in chunks {
-            for &cnt in &c.counts {
-                list.i.extend(std::iter::repeat_n(row, cnt as usize));
-                let last = *list.row_start.last().unwrap();
-                list.row_start.push(last + cnt);
-                row += 1;
+        b.row_start[0] = 0;
+        let mut tasks = Vec::with_capacity(chunks.len());
+        {
+            let (mut is, mut js) = (&mut b.i[..], &mut b.j[..]);
+            let (mut starts, mut hist) = (&mut b.row_start[1..], &mut b.history[..]);
+            let mut at = 0;
+            for (c, chunk) in chunks.into_iter().enumerate() {
+                let len = chunk.j.len();
+                let (i1, i2) = std::mem::take(&mut is).split_at_mut(len);
+                let (j1, j2) = std::mem::take(&mut js).split_at_mut(len);
+                let (s1, s2) = std::mem::take(&mut starts).split_at_mut(chunk.counts.len());
+                let (h1, h2) = std::mem::take(&mut hist).split_at_mut(len * stride);
+                (is, js, starts, hist) = (i2, j2, s2, h2);
+                tasks.push((c * CHUNK, at, chunk, (i1, j1, s1, h1)));
+                at += len;
             }
-            list.j.extend_from_slice(&c.j);
         }
-
-        // Carry history from the old row of the same particle. Without a reorder both rows
-        // ascend in j and merge; after one, look each partner up.
-        let mut tasks = Vec::with_capacity(n.div_ceil(CHUNK));
-        let mut rest = &mut list.history[..];
-        for c in 0..n.div_ceil(CHUNK) {
-            let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
-            let len = (list.row_start[rows.end] - list.row_start[rows.start]) as usize;
-            let (mine, tail) = rest.split_at_mut(len * stride);
-            tasks.push((rows, mine));
-            rest = tail;
-        }
-        let (new_j, new_start) = (&list.j, &list.row_start);
+        // Each row's pairs and their history, carried from the old row of the same particle
+        // (zero for a new pair). Without a reorder both rows ascend in j and merge; after
+        // one, look each partner up.
         tasks
             .into_par_iter()
             .with_max_len(chunks_per_task())
-            .for_each(|(rows, hist)| {
-                let base = new_start[rows.start] as usize;
-                for i in rows {
+            .for_each(|(first_row, at, chunk, (is, js, starts, hist))| {
+                js.copy_from_slice(&chunk.j);
+                let mut p = 0;
+                for (r, &count) in chunk.counts.iter().enumerate() {
+                    let i = first_row + r;
+                    let row = p..p + count as usize;
+                    is[row.clone()].fill(i as u32);
+                    starts[r] = (at + row.end) as u32;
                     let old_row = old.row_of(old_of_new.map_or(i, |m| m[i] as usize));
                     let mut k = old_row.start;
-                    for p in new_start[i] as usize..new_start[i + 1] as usize {
-                        let j = new_j[p];
+                    for p in row.clone() {
+                        let j = chunk.j[p];
                         let found = match old_of_new {
                             None => {
                                 while k < old_row.end && old.j[k] < j {
@@ -217,18 +210,25 @@ impl PairList {
                                 old_row.clone().find(|&q| old.j[q] == oj)
                             }
                         };
-                        let row = &mut hist[(p - base) * stride..(p - base + 1) * stride];
+                        let h = &mut hist[p * stride..(p + 1) * stride];
                         match found {
                             Some(q) => {
-                                row.copy_from_slice(&old.history[q * stride..(q + 1) * stride])
+                                h.copy_from_slice(&old.history[q * stride..(q + 1) * stride])
                             }
-                            // A new pair starts from a zero history.
-                            None => row.fill(0.0),
+                            None => h.fill(0.0),
                         }
                     }
+                    p = row.end;
                 }
             });
-
+        let list = PairList {
+            i: b.i,
+            j: b.j,
+            row_start: b.row_start,
+            history: b.history,
+            stride,
+            spare: Buffers::default(),
+        };
         let old = std::mem::replace(self, list);
         self.spare = Buffers {
             i: old.i,
@@ -271,20 +271,13 @@ fn room<T>(v: &mut Vec<T>, len: usize) {
     }
 }
 
-/// `v` holding `len` values, of no meaning: what it held before, zeros where it grew. For a
-/// buffer whose every value is written next; in place when it has the room, else as
-/// [`room`].
-fn resized<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
+/// `v` holding `len` values: what it held before, zeros where it grew (all zeros when it
+/// needed a new allocation); in place when it has the room, else as [`room`].
+pub(crate) fn resized<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
     if v.capacity() < len {
         room(v, len);
     }
     v.truncate(len);
-    v.resize(len, T::default());
-}
-
-/// [`room`], then `len` zeros.
-pub(crate) fn zeroed<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
-    room(v, len);
     v.resize(len, T::default());
 }
 

@@ -4,7 +4,7 @@
 
 use super::team::{Team, map_items};
 use crate::contact::{Contact, ContactModel, ContactOut};
-use crate::neighbor::pairs::zeroed;
+use crate::neighbor::pairs::resized;
 use crate::neighbor::schedule::Block;
 use crate::neighbor::{PairList, PairSchedule};
 use crate::particles::Particles;
@@ -133,10 +133,11 @@ pub(super) fn add_pair_forces(
     } = pairs;
     let stride = *stride;
     // Sized at a new schedule only, with an eighth to spare rather than doubling: at
-    // 100,000 particles they are 10 MB. Zero, as the last particle phase left them.
+    // 100,000 particles they are 10 MB. Zero, as the last particle phase left them, so
+    // only what they grow by needs zeroing (all of it was, serially, at every rebuild).
     if sums.force.len() != schedule.sums_len {
-        zeroed(&mut sums.force, schedule.sums_len);
-        zeroed(&mut sums.torque, schedule.sums_len);
+        resized(&mut sums.force, schedule.sums_len);
+        resized(&mut sums.torque, schedule.sums_len);
     }
     debug_assert!(
         sums.force
