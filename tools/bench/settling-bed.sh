@@ -12,9 +12,11 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 N=${N:-20000}
 S=${S:-20000}
-# Rounds of the four tilth runs, alternating; the ratios use each run's median. Two-thread
-# speed on this VM depends on how the host schedules its two virtual CPUs (BENCHMARKS.md,
-# fifteenth sitting), so a single round can land anywhere in that spread.
+# Rounds of the four tilth runs and the two peers, alternating; the ratios use each run's
+# median. Two-thread speed on this VM depends on how the host schedules its two virtual
+# CPUs (BENCHMARKS.md, fifteenth sitting), and the whole machine's speed drifts by up to a
+# quarter within a sitting (twenty-third), so a single round can land anywhere in that
+# spread; the peers run in every round so that a slow spell slows both sides.
 ROUNDS=${ROUNDS:-1}
 DECK=${DECK:-$(cd ../shared/benchmarks/settling-bed && pwd)}
 cargo build --release -q -p tilth
@@ -36,23 +38,27 @@ for round in $(seq "$ROUNDS"); do
       echo "tilth --cohesion $c, ${t} thread(s), round $round: $r particle-steps/s"
     done
   done
+  if command -v liggghts >/dev/null; then
+    (cd "$work" && liggghts -in "$DECK/bed.liggghts" -var npart "$N" -var nsteps "$S" -log none > liggghts.out 2>&1)
+    r=$(rate "$(loop_time "$work/liggghts.out")")
+    RUNS[liggghts]="${RUNS[liggghts]:-} $r"
+    echo "LIGGGHTS, round $round: $r particle-steps/s (loop time $(loop_time "$work/liggghts.out") s)"
+  fi
+  if command -v lmp >/dev/null; then
+    (cd "$work" && lmp -in "$DECK/bed.lammps" -var npart "$N" -var nsteps "$S" -log none > lammps.out 2>&1)
+    r=$(rate "$(loop_time "$work/lammps.out")")
+    RUNS[lammps]="${RUNS[lammps]:-} $r"
+    echo "LAMMPS, round $round: $r particle-steps/s (loop time $(loop_time "$work/lammps.out") s)"
+  fi
 done
 # The median of the rounds (the mean of the middle two for an even count).
 median() { tr ' ' '\n' | grep . | sort -g | awk '{ v[NR] = $1 } END { m = int((NR + 1) / 2); printf "%.4g", (NR % 2) ? v[m] : (v[m] + v[m + 1]) / 2 }'; }
-for k in sjkr1 sjkr2 jkr1 jkr2; do
-  R[$k]=$(echo "${RUNS[$k]}" | median)
+for k in sjkr1 sjkr2 jkr1 jkr2 liggghts lammps; do
+  [ -n "${RUNS[$k]:-}" ] && R[$k]=$(echo "${RUNS[$k]}" | median)
 done
 [ "$ROUNDS" -gt 1 ] && for c in sjkr jkr; do for t in 1 2; do echo "tilth --cohesion $c, ${t} thread(s), median of $ROUNDS: ${R[$c$t]} particle-steps/s"; done; done
-if command -v liggghts >/dev/null; then
-  (cd "$work" && liggghts -in "$DECK/bed.liggghts" -var npart "$N" -var nsteps "$S" -log none > liggghts.out 2>&1)
-  R[liggghts]=$(rate "$(loop_time "$work/liggghts.out")")
-  echo "LIGGGHTS: ${R[liggghts]} particle-steps/s (loop time $(loop_time "$work/liggghts.out") s)"
-fi
-if command -v lmp >/dev/null; then
-  (cd "$work" && lmp -in "$DECK/bed.lammps" -var npart "$N" -var nsteps "$S" -log none > lammps.out 2>&1)
-  R[lammps]=$(rate "$(loop_time "$work/lammps.out")")
-  echo "LAMMPS: ${R[lammps]} particle-steps/s (loop time $(loop_time "$work/lammps.out") s)"
-fi
+[ -n "${R[liggghts]:-}" ] && echo "LIGGGHTS, median of $ROUNDS: ${R[liggghts]} particle-steps/s"
+[ -n "${R[lammps]:-}" ] && echo "LAMMPS, median of $ROUNDS: ${R[lammps]} particle-steps/s"
 # Where each code's loop time went (tilth: its last round), side by side with the peers' own
 # breakdowns (LIGGGHTS: Pair/Neigh/Comm/Outpt/Other; LAMMPS: its timing table).
 for c in sjkr jkr; do
