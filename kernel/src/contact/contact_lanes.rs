@@ -5,6 +5,7 @@
 use super::lanes::LANES;
 use super::lanes::{F, V};
 use super::{Contact, NormalForce};
+use glam::DVec3;
 
 /// [`LANES`] contacts of one material pair, field by field as [`Contact`]. Lanes
 /// `count..` hold copies of lane 0, so that every lane computes something finite; what
@@ -187,4 +188,24 @@ pub fn with_lane_history<R>(h: &mut [F], k: usize, f: impl FnOnce(&mut [f64]) ->
         h[v].0[k] = *x;
     }
     out
+}
+
+/// A scalar torque form (`torques` of a rolling or extra law) run lane by lane, with its
+/// bits: the default of both slots' `torques_lanes`.
+#[inline(always)]
+pub fn torques_by_lane(
+    c: &ContactLanes,
+    normal: &NormalForceLanes,
+    coulomb_load: F,
+    history: &mut [F],
+    torques: impl Fn(&Contact, &NormalForce, f64, &mut [f64]) -> (DVec3, DVec3),
+) -> (V, V) {
+    let (mut ti, mut tj) = (V::ZERO, V::ZERO);
+    for k in 0..c.count {
+        let (n, load) = (normal.lane(k), coulomb_load.0[k]);
+        let (a, b) = with_lane_history(history, k, |h| torques(&c.lane(k), &n, load, h));
+        ti.set_lane(k, a);
+        tj.set_lane(k, b);
+    }
+    (ti, tj)
 }

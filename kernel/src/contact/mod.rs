@@ -36,7 +36,7 @@ pub mod lanes;
 pub mod laws;
 pub mod model;
 
-pub use contact_lanes::{ContactLanes, NormalForceLanes, with_lane_history};
+pub use contact_lanes::{ContactLanes, NormalForceLanes, torques_by_lane, with_lane_history};
 pub use geometry::Contact;
 pub use lanes::{F, LANES, M, V};
 pub use laws::{AnyBond, AnyDamping, AnyExtra, AnyNormal, AnyRolling, AnyTangential};
@@ -174,14 +174,9 @@ pub trait RollingLaw: Send + Sync {
         coulomb_load: F,
         history: &mut [F],
     ) -> (V, V) {
-        let (mut ti, mut tj) = (V::ZERO, V::ZERO);
-        for k in 0..c.count {
-            let (n, load) = (normal.lane(k), coulomb_load.0[k]);
-            let (a, b) = with_lane_history(history, k, |h| self.torques(&c.lane(k), &n, load, h));
-            ti.set_lane(k, a);
-            tj.set_lane(k, b);
-        }
-        (ti, tj)
+        torques_by_lane(c, normal, coulomb_load, history, |c, n, load, h| {
+            self.torques(c, n, load, h)
+        })
     }
 }
 
@@ -234,14 +229,9 @@ pub trait ExtraLaw: Send + Sync {
         coulomb_load: F,
         history: &mut [F],
     ) -> (V, V) {
-        let (mut ti, mut tj) = (V::ZERO, V::ZERO);
-        for k in 0..c.count {
-            let (n, load) = (normal.lane(k), coulomb_load.0[k]);
-            let (a, b) = with_lane_history(history, k, |h| self.torques(&c.lane(k), &n, load, h));
-            ti.set_lane(k, a);
-            tj.set_lane(k, b);
-        }
-        (ti, tj)
+        torques_by_lane(c, normal, coulomb_load, history, |c, n, load, h| {
+            self.torques(c, n, load, h)
+        })
     }
 }
 
