@@ -122,6 +122,69 @@ fn same_bits(a: DVec3, b: DVec3) -> bool {
         .all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
+/// An established contact's history or a new one's. The values span the scales the laws
+/// keep (springs of nm to mm, JKR's sqrt(a) ~ 1e-3 m^(1/2)), so contacts stick and slide,
+/// and JKR's Newton starts from its last root or from its own guess.
+fn random_history(rng: &mut ChaCha8Rng, stride: usize) -> Vec<f64> {
+    let mut row = vec![0.0; stride];
+    if rng.random_bool(0.7) {
+        row[0] = 1.0;
+        for x in &mut row[1..] {
+            let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            *x = sign * 10f64.powf(rng.random_range(-9.0..-1.0));
+        }
+    }
+    row
+}
+
+/// Evaluates `lanes` (lanes `0..scalar.len()` are the contacts `scalar`, histories `rows`)
+/// in lanes and each contact alone, and asserts the same bits for the geometry, the
+/// outputs and the histories written. Returns how many contacts carried force.
+fn same_as_scalar(
+    name: &str,
+    m: &ContactModel,
+    lanes: &ContactLanes,
+    scalar: &[Contact],
+    rows: &[Vec<f64>],
+) -> usize {
+    let stride = m.history_stride();
+    let mut history: Vec<F> = (0..stride)
+        .map(|v| F(std::array::from_fn(|l| rows[l.min(rows.len() - 1)][v])))
+        .collect();
+    let out = m.evaluate_lanes(0, 0, lanes, &mut history).unwrap();
+    let mut forces = 0;
+    for (l, c) in scalar.iter().enumerate() {
+        assert_eq!(
+            format!("{:?}", lanes.lane(l)),
+            format!("{c:?}"),
+            "{name}: geometry"
+        );
+        let mut row = rows[l].clone();
+        let want: ContactOut = m.evaluate(0, 0, c, &mut row).unwrap();
+        let got = (
+            out.force.lane(l),
+            out.torque_i.lane(l),
+            out.torque_j.lane(l),
+        );
+        assert!(
+            same_bits(got.0, want.force)
+                && same_bits(got.1, want.torque_i)
+                && same_bits(got.2, want.torque_j),
+            "{name}, lane {l} of {}: lanes {got:?}, scalar {want:?}",
+            scalar.len()
+        );
+        for (v, x) in row.iter().enumerate() {
+            assert_eq!(
+                history[v].0[l].to_bits(),
+                x.to_bits(),
+                "{name}, lane {l}: history value {v}"
+            );
+        }
+        forces += (want.force != DVec3::ZERO) as usize;
+    }
+    forces
+}
+
 #[test]
 fn every_contact_law_in_lanes_gives_its_scalar_bits() {
     let models = models();
@@ -171,59 +234,72 @@ fn every_contact_law_in_lanes_gives_its_scalar_bits() {
                     (w[2], w[3]),
                     dt,
                 );
-                // An established contact or a new one. The history values span the scales
-                // the laws keep (springs of nm to mm, JKR's sqrt(a) ~ 1e-3 m^(1/2)), so
-                // contacts stick and slide, and JKR's Newton starts from its last root
-                // or from its own guess.
-                let mut row = vec![0.0; stride];
-                if rng.random_bool(0.7) {
-                    row[0] = 1.0;
-                    for x in &mut row[1..] {
-                        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-                        *x = sign * 10f64.powf(rng.random_range(-9.0..-1.0));
-                    }
-                }
                 scalar.push(c);
-                rows.push(row);
+                rows.push(random_history(&mut rng, stride));
             }
             let lanes = ContactLanes::between_spheres(&s, dt, count);
-            let mut history: Vec<F> = (0..stride)
-                .map(|v| F(std::array::from_fn(|l| rows[l][v])))
-                .collect();
-            let out = m.evaluate_lanes(0, 0, &lanes, &mut history).unwrap();
-            for l in 0..count {
-                let c = lanes.lane(l);
-                assert_eq!(
-                    format!("{c:?}"),
-                    format!("{:?}", scalar[l]),
-                    "{name}: geometry"
-                );
-                let mut row = rows[l].clone();
-                let want: ContactOut = m.evaluate(0, 0, &scalar[l], &mut row).unwrap();
-                let got = (
-                    out.force.lane(l),
-                    out.torque_i.lane(l),
-                    out.torque_j.lane(l),
-                );
-                assert!(
-                    same_bits(got.0, want.force)
-                        && same_bits(got.1, want.torque_i)
-                        && same_bits(got.2, want.torque_j),
-                    "{name}, lane {l} of {count}: lanes {got:?}, scalar {want:?}"
-                );
-                for (v, x) in row.iter().enumerate() {
-                    assert_eq!(
-                        history[v].0[l].to_bits(),
-                        x.to_bits(),
-                        "{name}, lane {l}: history value {v}"
-                    );
-                }
-                forces += (want.force != DVec3::ZERO) as usize;
-            }
+            forces += same_as_scalar(name, m, &lanes, &scalar[..count], &rows);
         }
         assert!(
             forces > 1000,
             "{name}: only {forces} contacts carried force"
+        );
+    }
+}
+
+/// A random touching contact of a sphere of 0.5-1.5 mm and a wall, pressed in by up to 5 %
+/// of its radius, moving and spinning against a wall that moves too.
+fn random_wall_contact(rng: &mut ChaCha8Rng, dt: f64) -> Contact {
+    let r: f64 = rng.random_range(0.5e-3..1.5e-3);
+    let overlap = rng.random_range(1e-9..0.05) * r;
+    let mut vec3 = |s: f64| {
+        DVec3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        )
+    };
+    let x = vec3(0.1);
+    let towards_wall = vec3(1.0).normalize();
+    let m = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) * RHO;
+    let (v, w, wall_velocity) = (vec3(0.5), vec3(200.0), vec3(0.05));
+    Contact::with_wall(
+        x,
+        x + towards_wall * (r - overlap),
+        r,
+        m,
+        0.4 * m * r * r,
+        v,
+        w,
+        wall_velocity,
+        dt,
+    )
+    .expect("the centre is off the wall")
+}
+
+#[test]
+fn every_contact_law_on_a_wall_in_lanes_gives_its_scalar_bits() {
+    // A wall is a body of infinite radius, mass and inertia: the lane forms must treat the
+    // infinities as the scalar forms do (sjkr's flat-wall area, rolling torques on i only).
+    let dt = 5e-6;
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for (name, m) in &models() {
+        let stride = m.history_stride();
+        let mut forces = 0;
+        for round in 0..400 {
+            let count = 1 + round % LANES;
+            let scalar: Vec<Contact> = (0..count)
+                .map(|_| random_wall_contact(&mut rng, dt))
+                .collect();
+            let rows: Vec<Vec<f64>> = (0..LANES)
+                .map(|_| random_history(&mut rng, stride))
+                .collect();
+            let lanes = ContactLanes::gather(&scalar);
+            forces += same_as_scalar(name, m, &lanes, &scalar, &rows);
+        }
+        assert!(
+            forces > 1000,
+            "{name}: only {forces} wall contacts carried force"
         );
     }
 }

@@ -1,9 +1,7 @@
 //! [`Contact`] and [`NormalForce`] for [`LANES`] contacts side by side, for the laws' lane
 //! forms (see `lanes.rs`).
 
-#[cfg(doc)]
-use super::lanes::LANES;
-use super::lanes::{F, V};
+use super::lanes::{F, LANES, V};
 use super::{Contact, NormalForce};
 use glam::DVec3;
 
@@ -97,6 +95,54 @@ impl ContactLanes {
             inertia_j: inertia.1,
             dt,
         }
+    }
+
+    /// Contacts `cs` (1 to [`LANES`], all with the same `dt`) side by side, field by field;
+    /// lanes past `cs.len()` repeat `cs[0]`. For contacts whose geometry is not computed in
+    /// lanes (a particle and a wall: each wall shape finds its own closest point).
+    #[inline(always)]
+    pub fn gather(cs: &[Contact]) -> ContactLanes {
+        debug_assert!(!cs.is_empty() && cs.len() <= LANES);
+        let mut c = ContactLanes {
+            count: cs.len(),
+            overlap: F::ZERO,
+            normal: V::ZERO,
+            r_eff: F::ZERO,
+            m_eff: F::ZERO,
+            radius_i: F::ZERO,
+            radius_j: F::ZERO,
+            arm_i: F::ZERO,
+            arm_j: F::ZERO,
+            v_n: F::ZERO,
+            v_t: V::ZERO,
+            omega_i: V::ZERO,
+            omega_j: V::ZERO,
+            mass_i: F::ZERO,
+            mass_j: F::ZERO,
+            inertia_i: F::ZERO,
+            inertia_j: F::ZERO,
+            dt: cs[0].dt,
+        };
+        for k in 0..LANES {
+            let s = &cs[if k < cs.len() { k } else { 0 }];
+            c.overlap.0[k] = s.overlap;
+            c.normal.set_lane(k, s.normal);
+            c.r_eff.0[k] = s.r_eff;
+            c.m_eff.0[k] = s.m_eff;
+            c.radius_i.0[k] = s.radius_i;
+            c.radius_j.0[k] = s.radius_j;
+            c.arm_i.0[k] = s.arm_i;
+            c.arm_j.0[k] = s.arm_j;
+            c.v_n.0[k] = s.v_n;
+            c.v_t.set_lane(k, s.v_t);
+            c.omega_i.set_lane(k, s.omega_i);
+            c.omega_j.set_lane(k, s.omega_j);
+            c.mass_i.0[k] = s.mass_i;
+            c.mass_j.0[k] = s.mass_j;
+            c.inertia_i.0[k] = s.inertia_i;
+            c.inertia_j.0[k] = s.inertia_j;
+        }
+        c
     }
 
     /// Lane `k` as a scalar contact (what a law without a lane form is given).
