@@ -43,12 +43,18 @@ use pair_forces::{PartialSums, SumRows, add_pair_forces};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use team::{Team, map_items};
-use wall_forces::{Body, WallList, WallRows, add_wall_forces};
+use wall_forces::{ChunkBodies, WallCtx, WallList, WallOut, WallRows, chunk_wall_forces};
 
 mod drift;
 mod pair_forces;
 mod team;
 mod wall_forces;
+
+thread_local! {
+    /// Each thread's wall-contact outputs of one particle-phase chunk ([`WallOut`]), kept
+    /// from chunk to chunk rather than allocated for each.
+    static WALL_OUTS: std::cell::Cell<Vec<WallOut>> = const { std::cell::Cell::new(Vec::new()) };
+}
 
 /// One particle-phase task's rows: force, torque, velocity, spin, position, wall contacts,
 /// and the blocks' partial sums of its particles.
@@ -714,9 +720,22 @@ impl Simulation {
             }
         }
         let wstart = &wc.start;
-        let list = WallList {
-            wall: &wc.wall,
-            feature: &wc.feature,
+        let wall_ctx = WallCtx {
+            list: WallList {
+                wall: &wc.wall,
+                feature: &wc.feature,
+            },
+            start: wstart,
+            walls,
+            model,
+            stride,
+            dt,
+            // Bonds are evaluated by the scalar pipeline only.
+            path: if model.has_bond() {
+                PairPath::OneByOne
+            } else {
+                self.pair_path
+            },
         };
         let (radius, mass, inertia, material) = (&p.radius, &p.mass, &p.inertia, &p.material);
         let limit2 = self.speed_limit * self.speed_limit;
@@ -734,6 +753,25 @@ impl Simulation {
             // (`realloc` bypasses the per-thread cache) on both threads at once
             // (BENCHMARKS.md, twentieth sitting).
             let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
+            // The chunk's wall contacts first, so that those with planes and other
+            // one-feature walls can be evaluated in lanes; each particle adds its own in
+            // its loop below.
+            let mut outs = WALL_OUTS.take();
+            outs.clear();
+            outs.resize(mine.force.len(), WallOut::NONE);
+            if !outs.is_empty() {
+                let bodies = ChunkBodies {
+                    first: c * CHUNK,
+                    x: xs,
+                    v: vs,
+                    w: ws,
+                    radius,
+                    mass,
+                    inertia,
+                    material,
+                };
+                chunk_wall_forces(&wall_ctx, &bodies, &mut mine, &mut outs, &mut hits);
+            }
             // Whether every kicked particle of the chunk passed the cheap test.
             let mut plausible_all = true;
             for k in 0..fs.len() {
@@ -746,29 +784,11 @@ impl Simulation {
                         t += bt;
                     }
                 }
-                let (e, end) = (wstart[i] as usize, wstart[i + 1] as usize);
-                if e < end {
-                    let body = Body {
-                        x: xs[k],
-                        radius: radius[i],
-                        mass: mass[i],
-                        inertia: inertia[i],
-                        material: material[i] as usize,
-                        v: vs[k],
-                        w: ws[k],
-                    };
-                    (f, t) = add_wall_forces(
-                        &body,
-                        e..end,
-                        &list,
-                        &mut mine,
-                        walls,
-                        model,
-                        stride,
-                        dt,
-                        &mut hits,
-                        (f, t),
-                    );
+                for o in &outs[wstart[i] as usize - mine.base..wstart[i + 1] as usize - mine.base] {
+                    if o.adds {
+                        f += o.force;
+                        t += o.torque;
+                    }
                 }
                 fs[k] = f;
                 ts[k] = t;
@@ -782,7 +802,8 @@ impl Simulation {
                     plausible_all &= plausible_motion(v, w, limit2);
                 }
             }
-            mine.add_wall_shares(&list, walls);
+            WALL_OUTS.set(outs);
+            mine.add_wall_shares(&wall_ctx.list, walls);
             // The exact test only for a chunk the cheap one flagged: the first
             // failing particle in index order, as a test of each would find it.
             // A chunk it passes is where a failure cannot be (the cheap test is

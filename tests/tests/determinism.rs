@@ -8,7 +8,7 @@ use tilth_kernel::contact::ContactModel;
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, PairPath, Setup, Simulation};
-use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric};
+use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric, mesh::Mesh};
 
 /// A funnel-fed pile with every law family: JKR, Mindlin, EPSD, walls of three kinds and a
 /// factory, 2,500 particles (several parallel chunks).
@@ -46,8 +46,13 @@ fn hertz_sjkr() -> ContactModel {
 
 /// [`pile`] with the contact model `m`.
 fn pile_with(m: ContactModel, threads: usize, skin: f64) -> Simulation {
+    pile_on(floor(), m, threads, skin)
+}
+
+/// [`pile_with`] on the floor `bottom`.
+fn pile_on(bottom: Wall, m: ContactModel, threads: usize, skin: f64) -> Simulation {
     let walls = vec![
-        floor(),
+        bottom,
         Wall::new(
             "ring",
             Box::new(Axisymmetric::cylinder(DVec3::ZERO, DVec3::Z, 0.02, 0.01).unwrap()),
@@ -269,8 +274,9 @@ fn timing_the_pair_phase_changes_nothing() {
     assert_eq!(timed.state_hash(), plain.state_hash());
 }
 
-/// The pair phase evaluates touching contacts in lanes, on AVX-512, AVX2 or SSE2, or one at
-/// a time: the same bits, through the pour's new contacts, ending contacts, reorders and
+/// The pair phase and the wall contacts (floor, ring, funnel) evaluate touching contacts in
+/// lanes, on AVX-512, AVX2 or SSE2, or one at a time: the same bits, through the pour's new
+/// contacts, ending contacts, reorders and
 /// rebuilds, with laws whose lane forms run their scalar forms (JKR, EPSD) and laws with
 /// lane forms of their own (the settling bed's Hertz, Mindlin, CDT, SJKR), on 1 and 2
 /// threads. (On a CPU without AVX-512 or AVX2, those paths fall back to the next one.)
@@ -315,4 +321,58 @@ fn contacts_in_lanes_give_the_bits_of_one_at_a_time() {
             "{name}: pairs {pairs}, wall contacts {walls}"
         );
     }
+}
+
+/// A shallow V-shaped trough of 5 mm triangles under the pile (z = 0.1 |x|, 60 mm square):
+/// most particles near it list one triangle, those near a seam several, of which the nearer
+/// shadow the others.
+fn trough() -> Wall {
+    let cells = 12;
+    let h = 0.06 / cells as f64;
+    let corner = |a: usize, b: usize| {
+        let x = -0.03 + a as f64 * h;
+        DVec3::new(x, -0.03 + b as f64 * h, 0.1 * x.abs())
+    };
+    let mut triangles = vec![];
+    for a in 0..cells {
+        for b in 0..cells {
+            let (p, q, r, t) = (
+                corner(a, b),
+                corner(a + 1, b),
+                corner(a + 1, b + 1),
+                corner(a, b + 1),
+            );
+            triangles.push([p, q, r]);
+            triangles.push([p, r, t]);
+        }
+    }
+    Wall::new("trough", Box::new(Mesh::new(triangles)), 0, Motion::Fixed)
+}
+
+/// A pile on a triangle mesh: its contacts with one listed triangle go through the lanes,
+/// those with several (shadowing) one at a time, in one chunk; the same bits as every
+/// contact one at a time.
+#[test]
+fn wall_contacts_on_a_mesh_in_lanes_give_the_bits_of_one_at_a_time() {
+    let mut runs: Vec<Simulation> = [(PairPath::Lanes, 2), (PairPath::OneByOne, 1)]
+        .iter()
+        .map(|&(path, threads)| {
+            let mut s = pile_on(trough(), hertz_sjkr(), threads, 4e-4);
+            s.set_pair_path(path);
+            s
+        })
+        .collect();
+    for _ in 0..6 {
+        for s in &mut runs {
+            s.run(2_000).unwrap();
+        }
+        assert_eq!(
+            runs[1].state_hash(),
+            runs[0].state_hash(),
+            "lanes and one at a time differ at step {}",
+            runs[0].step
+        );
+    }
+    let (_, walls) = runs[0].contact_counts();
+    assert!(walls > 10, "only {walls} wall contacts");
 }

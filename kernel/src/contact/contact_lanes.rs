@@ -97,51 +97,61 @@ impl ContactLanes {
         }
     }
 
-    /// Contacts `cs` (1 to [`LANES`], all with the same `dt`) side by side, field by field;
-    /// lanes past `cs.len()` repeat `cs[0]`. For contacts whose geometry is not computed in
-    /// lanes (a particle and a wall: each wall shape finds its own closest point).
+    /// All lanes zero, `count` 0: room to fill with [`ContactLanes::set_lane`].
+    pub const ZERO: ContactLanes = ContactLanes {
+        count: 0,
+        overlap: F::ZERO,
+        normal: V::ZERO,
+        r_eff: F::ZERO,
+        m_eff: F::ZERO,
+        radius_i: F::ZERO,
+        radius_j: F::ZERO,
+        arm_i: F::ZERO,
+        arm_j: F::ZERO,
+        v_n: F::ZERO,
+        v_t: V::ZERO,
+        omega_i: V::ZERO,
+        omega_j: V::ZERO,
+        mass_i: F::ZERO,
+        mass_j: F::ZERO,
+        inertia_i: F::ZERO,
+        inertia_j: F::ZERO,
+        dt: 0.0,
+    };
+
+    /// Puts contact `s` in lane `k` (and its `dt` for every lane): the inverse of
+    /// [`ContactLanes::lane`]. For contacts whose geometry is not computed in lanes (a
+    /// particle and a wall: each wall shape finds its own closest point).
     #[inline(always)]
+    pub fn set_lane(&mut self, k: usize, s: &Contact) {
+        self.overlap.0[k] = s.overlap;
+        self.normal.set_lane(k, s.normal);
+        self.r_eff.0[k] = s.r_eff;
+        self.m_eff.0[k] = s.m_eff;
+        self.radius_i.0[k] = s.radius_i;
+        self.radius_j.0[k] = s.radius_j;
+        self.arm_i.0[k] = s.arm_i;
+        self.arm_j.0[k] = s.arm_j;
+        self.v_n.0[k] = s.v_n;
+        self.v_t.set_lane(k, s.v_t);
+        self.omega_i.set_lane(k, s.omega_i);
+        self.omega_j.set_lane(k, s.omega_j);
+        self.mass_i.0[k] = s.mass_i;
+        self.mass_j.0[k] = s.mass_j;
+        self.inertia_i.0[k] = s.inertia_i;
+        self.inertia_j.0[k] = s.inertia_j;
+        self.dt = s.dt;
+    }
+
+    /// Contacts `cs` (1 to [`LANES`], all with the same `dt`) side by side; lanes past
+    /// `cs.len()` repeat `cs[0]`, so that every lane computes something finite.
     pub fn gather(cs: &[Contact]) -> ContactLanes {
         debug_assert!(!cs.is_empty() && cs.len() <= LANES);
-        let mut c = ContactLanes {
-            count: cs.len(),
-            overlap: F::ZERO,
-            normal: V::ZERO,
-            r_eff: F::ZERO,
-            m_eff: F::ZERO,
-            radius_i: F::ZERO,
-            radius_j: F::ZERO,
-            arm_i: F::ZERO,
-            arm_j: F::ZERO,
-            v_n: F::ZERO,
-            v_t: V::ZERO,
-            omega_i: V::ZERO,
-            omega_j: V::ZERO,
-            mass_i: F::ZERO,
-            mass_j: F::ZERO,
-            inertia_i: F::ZERO,
-            inertia_j: F::ZERO,
-            dt: cs[0].dt,
-        };
+        let mut c = ContactLanes::ZERO;
         for k in 0..LANES {
-            let s = &cs[if k < cs.len() { k } else { 0 }];
-            c.overlap.0[k] = s.overlap;
-            c.normal.set_lane(k, s.normal);
-            c.r_eff.0[k] = s.r_eff;
-            c.m_eff.0[k] = s.m_eff;
-            c.radius_i.0[k] = s.radius_i;
-            c.radius_j.0[k] = s.radius_j;
-            c.arm_i.0[k] = s.arm_i;
-            c.arm_j.0[k] = s.arm_j;
-            c.v_n.0[k] = s.v_n;
-            c.v_t.set_lane(k, s.v_t);
-            c.omega_i.set_lane(k, s.omega_i);
-            c.omega_j.set_lane(k, s.omega_j);
-            c.mass_i.0[k] = s.mass_i;
-            c.mass_j.0[k] = s.mass_j;
-            c.inertia_i.0[k] = s.inertia_i;
-            c.inertia_j.0[k] = s.inertia_j;
+            c.set_lane(k, &cs[if k < cs.len() { k } else { 0 }]);
         }
+        c.count = cs.len();
         c
     }
 
