@@ -12,8 +12,8 @@ use glam::DVec3;
 
 mod lanes;
 
-/// How the pair phase evaluates touching contacts. Every path gives the same bits; the
-/// choice is there to show it, and to time one against another.
+/// How the pair phase and the wall contacts evaluate touching contacts. Every path gives
+/// the same bits; the choice is there to show it, and to time one against another.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum PairPath {
     /// In lanes, on the widest vector instructions the CPU has (the default).

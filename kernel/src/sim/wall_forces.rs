@@ -4,7 +4,7 @@
 //! A chunk's wall contacts are evaluated before its particles are summed, out of the
 //! particle loop: kept inline, their code filled the loop's registers and the running force
 //! sums of every particle went through the stack; taken together, the touching contacts
-//! with one-feature walls go through the laws' lane forms like the pair phase's.
+//! with a wall of one listed feature go through the laws' lane forms like the pair phase's.
 
 use super::PairPath;
 #[cfg(doc)]

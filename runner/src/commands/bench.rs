@@ -60,8 +60,8 @@ pub struct SettlingBedArgs {
     /// run's threads (a diagnostic for comparing pair-phase code; BENCHMARKS.md).
     #[arg(long, default_value_t = 0)]
     pub pair_phase_reps: usize,
-    /// How the pair phase evaluates touching contacts (every path gives the same bits; for
-    /// timing one against another).
+    /// How the pair phase and the wall contacts evaluate touching contacts (every path
+    /// gives the same bits; for timing one against another).
     #[arg(long, value_enum, default_value_t = PairPathArg::Lanes)]
     pub pair_path: PairPathArg,
 }
