@@ -749,17 +749,17 @@ impl Simulation {
         let chunk = |c: usize,
                      ((((((fs, ts), vs), ws), xs), mut mine), block_sums): ChunkRows|
          -> ChunkResult {
-            // Room for a particle's usual wall hits: growing it took glibc's arena lock
-            // (`realloc` bypasses the per-thread cache) on both threads at once
-            // (BENCHMARKS.md, twentieth sitting).
-            let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
-            // The chunk's wall contacts first, so that those with planes and other
-            // one-feature walls can be evaluated in lanes; each particle adds its own in
-            // its loop below.
+            // The chunk's wall contacts first, so that the touching ones with a wall of
+            // one listed feature can be evaluated in lanes; each particle adds its own in
+            // its loop below. Most chunks have none (and need no scratch space).
             let mut outs = WALL_OUTS.take();
             outs.clear();
             outs.resize(mine.force.len(), WallOut::NONE);
             if !outs.is_empty() {
+                // Room for a particle's usual wall hits: growing it took glibc's arena lock
+                // (`realloc` bypasses the per-thread cache) on both threads at once
+                // (BENCHMARKS.md, twentieth sitting).
+                let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
                 let bodies = ChunkBodies {
                     first: c * CHUNK,
                     x: xs,
