@@ -52,6 +52,7 @@ macro_rules! map {
         F(out)
     }};
 }
+pub(crate) use map;
 
 /// `M` from a condition on lane `k`.
 macro_rules! mask {
