@@ -25,6 +25,15 @@ struct Batch {
     spheres: SpheresLanes,
 }
 
+/// A pair whose `|d|^2 < (r_i + r_j)^2 * SURELY_TOUCHING` (and `> 0`) touches as `Contact`
+/// decides it, `r_i + r_j - sqrt(|d|^2) > 0`, whatever the rounding: the square and the
+/// product carry at most 2.3e-16 relative error (two roundings of 1.1e-16), leaving
+/// `|d|^2 < (r_i + r_j)^2 (1 - 7.7e-16)`; the exact root is then below
+/// `(r_i + r_j)(1 - 3.8e-16)`, and its rounding (1.1e-16 at most) keeps it below
+/// `r_i + r_j`. A difference of two distinct finite doubles has the sign of the exact one.
+/// Pairs nearer the edge take the exact test.
+const SURELY_TOUCHING: f64 = 1.0 - 1e-15;
+
 thread_local! {
     /// Each thread's list of a block's candidate pairs, kept from block to block: a block's
     /// is too large for the allocator's per-thread cache, and two threads allocating it at
@@ -107,10 +116,13 @@ impl Ctx<'_> {
             let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
             let d = p.position[j] - p.position[i];
             let rsum = p.radius[i] + p.radius[j];
+            let (dist2, rr) = (d.length_squared(), rsum * rsum);
             // `&`, not `&&`: both sides are cheap, and a second branch would be mispredicted.
-            let skip = (history[(k - base) * stride + ACTIVE] == 0.0)
-                & (d.length_squared() >= rsum * rsum);
-            candidates[n] = (k - base) as u32;
+            let skip = (history[(k - base) * stride + ACTIVE] == 0.0) & (dist2 >= rr);
+            // Touching for certain, as `Contact` decides it (`r_i + r_j - |d| > 0` and
+            // `|d| != 0`), without the square root: see [`SURELY_TOUCHING`].
+            let surely = (dist2 > 0.0) & (dist2 < rr * SURELY_TOUCHING);
+            candidates[n] = (k - base) as u32 | (surely as u32) << 31;
             n += !skip as usize;
         }
         let mut carrying = 0;
@@ -121,16 +133,20 @@ impl Ctx<'_> {
             materials: (0, 0),
             spheres: SpheresLanes::ZERO,
         };
-        for &kk in &candidates[..n] {
-            let k = base + kk as usize;
+        for &c in &candidates[..n] {
+            let kk = (c & !(1 << 31)) as usize;
+            let k = base + kk;
             let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
-            let at = kk as usize * stride;
-            let d = p.position[j] - p.position[i];
-            let dist = d.length_squared().sqrt();
-            // As `Contact` computes it.
-            let overlap = p.radius[i] + p.radius[j] - dist;
+            let at = kk * stride;
+            let touching = c >> 31 != 0 || {
+                let d = p.position[j] - p.position[i];
+                let dist = d.length_squared().sqrt();
+                // As `Contact` computes it.
+                let overlap = p.radius[i] + p.radius[j] - dist;
+                overlap > 0.0 && dist != 0.0
+            };
             let materials = (p.material[i] as usize, p.material[j] as usize);
-            if overlap > 0.0 && dist != 0.0 {
+            if touching {
                 if batch.count > 0 && batch.materials != materials {
                     carrying += self.flush(
                         &mut batch,
@@ -280,5 +296,30 @@ impl Ctx<'_> {
             carrying += (f != DVec3::ZERO) as usize;
         }
         carrying
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SURELY_TOUCHING;
+    use rand::{Rng, SeedableRng};
+
+    /// Just below the threshold, across radii of six decades and the doubles' whole
+    /// mantissa range, the exact test agrees: `r - sqrt(d2) > 0`.
+    #[test]
+    fn a_pair_surely_touching_touches_by_the_exact_test() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..200_000 {
+            let rsum: f64 = 10f64.powf(rng.random_range(-6.0..0.0));
+            let rr = rsum * rsum;
+            let edge = rr * SURELY_TOUCHING;
+            for ulps in 1..8u64 {
+                let d2 = f64::from_bits(edge.to_bits() - ulps);
+                assert!(
+                    rsum - d2.sqrt() > 0.0,
+                    "r {rsum:e}, |d|^2 {d2:e} ({ulps} ulps below the threshold)"
+                );
+            }
+        }
     }
 }
