@@ -227,7 +227,7 @@ impl Ctx<'_> {
         let p = self.p;
         let stride = self.stride;
         // Each lane's particles and history row; lanes past `count` repeat lane 0: finite
-        // values whose results are dropped (or written again, the same bits, to lane 0's row).
+        // values whose results are dropped.
         let mut i = [0usize; LANES];
         let mut j = [0usize; LANES];
         let mut at = [0usize; LANES];
@@ -240,8 +240,8 @@ impl Ctx<'_> {
         assert!(i.iter().chain(&j).all(|&q| q < n));
         assert!(at.iter().all(|&a| a + stride <= history.len()));
         // Component by component over the lanes, which the compiler turns into vector
-        // gathers: 7-12 % off the pair phase against loading lane by lane into the batch
-        // (BENCHMARKS.md, twenty-fifth sitting).
+        // gathers: a few per cent off the pair phase against loading lane by lane into the
+        // batch (2-12 % by the measure; BENCHMARKS.md, twenty-fifth sitting).
         // SAFETY (both macros): every index was checked against its slice's length above
         // (a slice of `DVec3` viewed as `f64` holds three per particle).
         macro_rules! scalar {
@@ -304,8 +304,8 @@ mod tests {
     use super::SURELY_TOUCHING;
     use rand::{Rng, SeedableRng};
 
-    /// Just below the threshold, across radii of six decades and the doubles' whole
-    /// mantissa range, the exact test agrees: `r - sqrt(d2) > 0`.
+    /// Just below the threshold, for radii spread over six decades (and so over the
+    /// doubles' mantissas), the exact test agrees: `r - sqrt(d2) > 0`.
     #[test]
     fn a_pair_surely_touching_touches_by_the_exact_test() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
