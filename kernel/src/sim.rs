@@ -42,11 +42,14 @@ pub use pair_forces::PairPath;
 use pair_forces::{PartialSums, SumRows, add_pair_forces};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use sum_and_kick::{ChunkSums, ChunkWalls, sum_and_kick};
 use team::{Team, map_items};
 use wall_forces::{ChunkBodies, WallCtx, WallList, WallOut, WallRows, chunk_wall_forces};
 
 mod drift;
+mod flat;
 mod pair_forces;
+mod sum_and_kick;
 mod team;
 mod wall_forces;
 
@@ -772,36 +775,27 @@ impl Simulation {
                 };
                 chunk_wall_forces(&wall_ctx, &bodies, &mut mine, &mut outs, &mut hits);
             }
+            let rows = c * CHUNK..c * CHUNK + fs.len();
             // Whether every kicked particle of the chunk passed the cheap test.
-            let mut plausible_all = true;
-            for k in 0..fs.len() {
-                let i = c * CHUNK + k;
-                let mut f = gravity * mass[i];
-                let mut t = DVec3::ZERO;
-                for b in block_sums.iter_mut() {
-                    if let Some((bf, bt)) = b.take(i) {
-                        f += bf;
-                        t += bt;
-                    }
-                }
-                for o in &outs[wstart[i] as usize - mine.base..wstart[i + 1] as usize - mine.base] {
-                    if o.adds {
-                        f += o.force;
-                        t += o.torque;
-                    }
-                }
-                fs[k] = f;
-                ts[k] = t;
-                if kick {
-                    let (kv, kw) = kick_factor[i];
-                    // Tested from registers: reading back what was just stored
-                    // loads across two stores, which the CPU cannot forward.
-                    let (v, w) = (vs[k] + f * kv, ws[k] + t * kw);
-                    vs[k] = v;
-                    ws[k] = w;
-                    plausible_all &= plausible_motion(v, w, limit2);
-                }
-            }
+            let plausible_all = sum_and_kick(
+                ChunkSums {
+                    first: c * CHUNK,
+                    f: fs,
+                    t: ts,
+                    v: vs,
+                    w: ws,
+                    mass: &mass[rows.clone()],
+                    kick: kick.then(|| &kick_factor[rows.clone()]),
+                },
+                gravity,
+                block_sums,
+                ChunkWalls {
+                    outs: &outs,
+                    start: &wstart[rows.start..rows.end + 1],
+                    base: mine.base,
+                },
+                limit2,
+            );
             WALL_OUTS.set(outs);
             mine.add_wall_shares(&wall_ctx.list, walls);
             // The exact test only for a chunk the cheap one flagged: the first
@@ -809,7 +803,6 @@ impl Simulation {
             // A chunk it passes is where a failure cannot be (the cheap test is
             // exact for what it passes), so only it may go on to the next drift.
             if plausible_all && positions_ok {
-                let rows = c * CHUNK..c * CHUNK + fs.len();
                 let next = drift_next.then(|| {
                     kick_and_drift(
                         ChunkMotion {

@@ -3,7 +3,9 @@
 //! runs it in a pass of its own, or, within [`Simulation::run`], in the step before's
 //! particle phase as soon as a chunk's second half kick is done.
 
+use super::flat::{FLAT, GROUP, length_squared, load3, repeat3, spread3, store3};
 use super::{Aabb, CHUNK, Failure, Simulation, plausible_position};
+use crate::contact::lanes::{F, LANES, map};
 use glam::DVec3;
 
 /// What the first half kick and drift found: the largest squared displacement since the
@@ -45,8 +47,42 @@ pub(super) struct ChunkMotion<'a> {
 /// x += v dt), with its largest displacement from `x0` and the cheap position test: the
 /// chunk's bounding box, and a sum that is zero only if every coordinate is finite (x * 0 is
 /// NaN for an infinite or NaN x).
+///
+/// Compiled once per instruction set, as the pair phase is (`sim/pair_forces/lanes.rs`),
+/// and run on the CPU's widest. Each operation is the scalar one of each coordinate, so the
+/// state has the same bits on every path; the scan's results do not depend on the order in
+/// which it sees the coordinates (a NaN fails every comparison, in any order).
 #[inline]
 pub(super) fn kick_and_drift(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has the features the function is compiled for.
+            return unsafe { kick_and_drift_avx512(m, dt, dom) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above.
+            return unsafe { kick_and_drift_avx2(m, dt, dom) };
+        }
+    }
+    kick_and_drift_body(m, dt, dom)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,avx")]
+unsafe fn kick_and_drift_avx512(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
+    kick_and_drift_body(m, dt, dom)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx")]
+unsafe fn kick_and_drift_avx2(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
+    kick_and_drift_body(m, dt, dom)
+}
+
+/// Inlined into each instruction set's copy above.
+#[inline(always)]
+fn kick_and_drift_body(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
     let ChunkMotion {
         x,
         v,
@@ -56,11 +92,61 @@ pub(super) fn kick_and_drift(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
         kf,
         x0,
     } = m;
+    let n = x.len();
     // Plain comparisons rather than f64::max and min: those also order NaNs, which costs a
     // chain of extra instructions per particle, and a NaN fails the finite test anyway (a
     // NaN compares false, so it is skipped here just as max and min skip it).
-    let (mut worst, mut lo, mut hi, mut zero) = (0.0f64, x[0], x[0], DVec3::ZERO);
-    for k in 0..x.len() {
+    let first = x[0];
+    let start = repeat3(first.to_array());
+    let (mut worst, mut lo, mut hi, mut zero) = (F::ZERO, start, start, [F::ZERO; 3]);
+    let whole = n - n % GROUP;
+    {
+        // The vectors as flat coordinates: the loop is element-wise but for the kick
+        // factors (one per particle, spread over its three coordinates) and the squared
+        // displacement (three coordinates summed per particle).
+        let xf: &mut [f64] = bytemuck::cast_slice_mut(&mut x[..whole]);
+        let vf: &mut [f64] = bytemuck::cast_slice_mut(&mut v[..whole]);
+        let wf: &mut [f64] = bytemuck::cast_slice_mut(&mut w[..whole]);
+        let ff: &[f64] = bytemuck::cast_slice(&f[..whole]);
+        let tf: &[f64] = bytemuck::cast_slice(&t[..whole]);
+        let x0f: &[f64] = bytemuck::cast_slice(&x0[..whole]);
+        for g in 0..whole / GROUP {
+            let (at, kf) = (g * FLAT, &kf[g * GROUP..(g + 1) * GROUP]);
+            let kv = spread3(map!(|k| kf[k].0));
+            let kw = spread3(map!(|k| kf[k].1));
+            let (fs, ts, x0s) = (load3(ff, at), load3(tf, at), load3(x0f, at));
+            let (mut vs, mut ws, mut xs) = (load3(vf, at), load3(wf, at), load3(xf, at));
+            let mut dx = [F::ZERO; 3];
+            for r in 0..3 {
+                vs[r] += fs[r] * kv[r];
+                ws[r] += ts[r] * kw[r];
+                xs[r] += vs[r] * dt;
+                dx[r] = xs[r] - x0s[r];
+                lo[r] = F::select(xs[r].lt(lo[r]), xs[r], lo[r]);
+                hi[r] = F::select(xs[r].gt(hi[r]), xs[r], hi[r]);
+                zero[r] += xs[r] * 0.0;
+            }
+            store3(vf, at, vs);
+            store3(wf, at, ws);
+            store3(xf, at, xs);
+            let d2 = length_squared(&dx);
+            worst = F::select(d2.gt(worst), d2, worst);
+        }
+    }
+    let mut worst = worst
+        .0
+        .into_iter()
+        .fold(0.0f64, |a, b| if b > a { b } else { a });
+    let (mut lo3, mut hi3, mut zero3) = (first, first, DVec3::ZERO);
+    for c in 0..FLAT {
+        let (r, k, axis) = (c / LANES, c % LANES, c % 3);
+        let (l, h) = (lo[r].0[k], hi[r].0[k]);
+        lo3[axis] = if l < lo3[axis] { l } else { lo3[axis] };
+        hi3[axis] = if h > hi3[axis] { h } else { hi3[axis] };
+        zero3[axis] += zero[r].0[k];
+    }
+    let (mut lo, mut hi, mut zero) = (lo3, hi3, zero3);
+    for k in whole..n {
         let (kv, kw) = kf[k];
         let vk = v[k] + f[k] * kv;
         v[k] = vk;
@@ -133,6 +219,117 @@ impl Simulation {
                     p.position[i] -= p.velocity[i] * dt;
                     p.velocity[i] -= p.force[i] * kv;
                     p.angular_velocity[i] -= p.torque[i] * kw;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::sum_and_kick::tests::{first_difference, values};
+    use super::*;
+
+    /// One particle at a time, as the drift was written before the flat loop: the oracle.
+    fn one_at_a_time(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
+        let ChunkMotion {
+            x,
+            v,
+            w,
+            f,
+            t,
+            kf,
+            x0,
+        } = m;
+        let (mut worst, mut lo, mut hi, mut zero) = (0.0f64, x[0], x[0], DVec3::ZERO);
+        for k in 0..x.len() {
+            let (kv, kw) = kf[k];
+            let vk = v[k] + f[k] * kv;
+            v[k] = vk;
+            w[k] += t[k] * kw;
+            let xk = x[k] + vk * dt;
+            x[k] = xk;
+            let d2 = (xk - x0[k]).length_squared();
+            worst = if d2 > worst { d2 } else { worst };
+            lo = DVec3::select(xk.cmplt(lo), xk, lo);
+            hi = DVec3::select(xk.cmpgt(hi), xk, hi);
+            zero += xk * 0.0;
+        }
+        Drift {
+            max_disp2: worst,
+            positions_ok: zero == DVec3::ZERO
+                && plausible_position(lo, dom)
+                && plausible_position(hi, dom),
+        }
+    }
+
+    #[test]
+    fn the_flat_drift_gives_the_bits_of_one_particle_at_a_time() {
+        let mut x = values(11);
+        let vec3 = |x: &mut dyn FnMut() -> f64| DVec3::new(x(), x(), x());
+        let wide = Aabb {
+            min: DVec3::splat(-1e6),
+            max: DVec3::splat(1e6),
+        };
+        let narrow = Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        };
+        for n in [128usize, 77, 5, 1] {
+            for (dom, bad) in [
+                (wide, None),
+                (narrow, None),
+                (wide, Some(f64::NAN)),
+                (wide, Some(f64::INFINITY)),
+            ] {
+                let rows = |x: &mut dyn FnMut() -> f64| (0..n).map(|_| vec3(x)).collect::<Vec<_>>();
+                let (mut x1, mut v1, mut w1) = (rows(&mut x), rows(&mut x), rows(&mut x));
+                let (f, t, x0) = (rows(&mut x), rows(&mut x), rows(&mut x));
+                let kf: Vec<(f64, f64)> = (0..n).map(|_| (x(), x())).collect();
+                if let Some(b) = bad {
+                    x1[n / 2].y = b;
+                }
+                let (mut x2, mut v2, mut w2) = (x1.clone(), v1.clone(), w1.clone());
+                let dt = 1e-3;
+                let want = one_at_a_time(
+                    ChunkMotion {
+                        x: &mut x1,
+                        v: &mut v1,
+                        w: &mut w1,
+                        f: &f,
+                        t: &t,
+                        kf: &kf,
+                        x0: &x0,
+                    },
+                    dt,
+                    dom,
+                );
+                let got = kick_and_drift(
+                    ChunkMotion {
+                        x: &mut x2,
+                        v: &mut v2,
+                        w: &mut w2,
+                        f: &f,
+                        t: &t,
+                        kf: &kf,
+                        x0: &x0,
+                    },
+                    dt,
+                    dom,
+                );
+                assert_eq!(got.max_disp2.to_bits(), want.max_disp2.to_bits(), "n {n}");
+                assert_eq!(got.positions_ok, want.positions_ok, "n {n}, {bad:?}");
+                // The cases test what they are meant to: a bad coordinate fails, a wide box
+                // passes the rest.
+                if bad.is_some() || dom.max.x > 1.0 {
+                    assert_eq!(want.positions_ok, bad.is_none(), "n {n}");
+                }
+                for (what, a, b) in [
+                    ("position", &x2, &x1),
+                    ("velocity", &v2, &v1),
+                    ("spin", &w2, &w1),
+                ] {
+                    assert_eq!(first_difference(a, b), None, "n {n}: {what}");
                 }
             }
         }

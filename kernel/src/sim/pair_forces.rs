@@ -28,7 +28,7 @@ pub enum PairPath {
 }
 
 /// Each block's partial sums of force and torque (see [`PairSchedule`]). Zero between
-/// steps: the particle phase takes each sum as it adds it ([`PartialSums::by_chunk`]), so
+/// steps: the particle phase zeroes each sum as it adds it ([`PartialSums::by_chunk`]), so
 /// the pair phase adds to them without zeroing them first (a pass over 96 bytes per
 /// particle that took 4-5 % of a settling-bed run; BENCHMARKS.md, twenty-third sitting).
 #[derive(Debug, Default)]
@@ -43,20 +43,6 @@ pub(super) struct SumRows<'a> {
     pub start: usize,
     pub force: &'a mut [DVec3],
     pub torque: &'a mut [DVec3],
-}
-
-impl SumRows<'_> {
-    /// Particle `i`'s sums, if these rows hold it, left zero.
-    #[inline]
-    pub fn take(&mut self, i: usize) -> Option<(DVec3, DVec3)> {
-        let at = i.wrapping_sub(self.start);
-        (at < self.force.len()).then(|| {
-            (
-                std::mem::take(&mut self.force[at]),
-                std::mem::take(&mut self.torque[at]),
-            )
-        })
-    }
 }
 
 impl PartialSums {

@@ -1,0 +1,364 @@
+//! The particle phase's sum and second half kick for one chunk: each particle's force and
+//! torque (gravity, its share of each block's partial sums in block order, its walls in
+//! list order), then v += F dt/2m, omega += T dt/2I and the velocity half of the cheap test.
+//!
+//! Written coordinate by coordinate over the chunk's flat arrays ([`super::flat`]) and
+//! compiled once per instruction set, as the pair phase is: each particle's sum takes the
+//! same operations in the same order as one particle at a time, so the bits are the same
+//! on every path and thread count.
+
+use super::flat::{FLAT, GROUP, length_squared, load3, repeat3, spread3, store3};
+use super::pair_forces::SumRows;
+use super::plausible_motion;
+use super::wall_forces::WallOut;
+use crate::contact::lanes::{F, LANES, map};
+use glam::DVec3;
+
+/// One chunk's rows: particles `first..first + f.len()`.
+pub(super) struct ChunkSums<'a> {
+    pub first: usize,
+    pub f: &'a mut [DVec3],
+    pub t: &'a mut [DVec3],
+    pub v: &'a mut [DVec3],
+    pub w: &'a mut [DVec3],
+    /// The chunk's masses (kg).
+    pub mass: &'a [f64],
+    /// The chunk's kick factors (dt/2m, dt/2I), when the step kicks.
+    pub kick: Option<&'a [(f64, f64)]>,
+}
+
+/// The chunk's walls: particle `first + k` has outputs `outs[start[k] - base..start[k + 1]
+/// - base]`.
+pub(super) struct ChunkWalls<'a> {
+    pub outs: &'a [WallOut],
+    pub start: &'a [u32],
+    pub base: usize,
+}
+
+/// Sums and kicks one chunk, leaving each block's rows zero; returns whether every kicked
+/// particle passed the velocity half of the cheap test.
+#[inline]
+pub(super) fn sum_and_kick(
+    c: ChunkSums,
+    gravity: DVec3,
+    blocks: &mut [SumRows],
+    walls: ChunkWalls,
+    limit2: f64,
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has the features the function is compiled for.
+            return unsafe { sum_and_kick_avx512(c, gravity, blocks, walls, limit2) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above.
+            return unsafe { sum_and_kick_avx2(c, gravity, blocks, walls, limit2) };
+        }
+    }
+    sum_and_kick_body(c, gravity, blocks, walls, limit2)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,avx")]
+unsafe fn sum_and_kick_avx512(
+    c: ChunkSums,
+    gravity: DVec3,
+    blocks: &mut [SumRows],
+    walls: ChunkWalls,
+    limit2: f64,
+) -> bool {
+    sum_and_kick_body(c, gravity, blocks, walls, limit2)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx")]
+unsafe fn sum_and_kick_avx2(
+    c: ChunkSums,
+    gravity: DVec3,
+    blocks: &mut [SumRows],
+    walls: ChunkWalls,
+    limit2: f64,
+) -> bool {
+    sum_and_kick_body(c, gravity, blocks, walls, limit2)
+}
+
+/// Inlined into each instruction set's copy above.
+#[inline(always)]
+fn sum_and_kick_body(
+    c: ChunkSums,
+    gravity: DVec3,
+    blocks: &mut [SumRows],
+    walls: ChunkWalls,
+    limit2: f64,
+) -> bool {
+    let ChunkSums {
+        first,
+        f,
+        t,
+        v,
+        w,
+        mass,
+        kick,
+    } = c;
+    let n = f.len();
+    let whole = n - n % GROUP;
+    // Gravity first, then every block's rows of this chunk in block order, each a run of
+    // consecutive particles: a particle's sum grows in the order one particle at a time
+    // would add to it.
+    {
+        let g = repeat3(gravity.to_array());
+        let ff: &mut [f64] = bytemuck::cast_slice_mut(&mut f[..whole]);
+        for grp in 0..whole / GROUP {
+            let m = spread3(map!(|k| mass[grp * GROUP + k]));
+            store3(ff, grp * FLAT, std::array::from_fn(|r| g[r] * m[r]));
+        }
+        for k in whole..n {
+            f[k] = gravity * mass[k];
+        }
+        bytemuck::cast_slice_mut::<DVec3, f64>(t).fill(0.0);
+    }
+    for b in blocks.iter_mut() {
+        let at = b.start - first;
+        let rows = at..at + b.force.len();
+        add_and_zero(&mut f[rows.clone()], b.force);
+        add_and_zero(&mut t[rows], b.torque);
+    }
+    for k in 0..n {
+        let list = walls.start[k] as usize - walls.base..walls.start[k + 1] as usize - walls.base;
+        for o in &walls.outs[list] {
+            if o.adds {
+                f[k] += o.force;
+                t[k] += o.torque;
+            }
+        }
+    }
+    let Some(kf) = kick else {
+        return true;
+    };
+    let mut ok = F::splat(1.0);
+    {
+        let vf: &mut [f64] = bytemuck::cast_slice_mut(&mut v[..whole]);
+        let wf: &mut [f64] = bytemuck::cast_slice_mut(&mut w[..whole]);
+        let ff: &[f64] = bytemuck::cast_slice(&f[..whole]);
+        let tf: &[f64] = bytemuck::cast_slice(&t[..whole]);
+        for grp in 0..whole / GROUP {
+            let (at, kf) = (grp * FLAT, &kf[grp * GROUP..(grp + 1) * GROUP]);
+            let kv = spread3(map!(|k| kf[k].0));
+            let kw = spread3(map!(|k| kf[k].1));
+            let (fs, ts) = (load3(ff, at), load3(tf, at));
+            let (mut vs, mut ws) = (load3(vf, at), load3(wf, at));
+            for r in 0..3 {
+                vs[r] += fs[r] * kv[r];
+                ws[r] += ts[r] * kw[r];
+            }
+            store3(vf, at, vs);
+            store3(wf, at, ws);
+            // As `plausible_motion` tests, lane by lane; a failing lane zeroes its flag.
+            let (v2, w2) = (length_squared(&vs), length_squared(&ws));
+            let inf = F::splat(f64::INFINITY);
+            let pass = map!(
+                |k| ((v2.0[k] <= limit2) & (v2.0[k] < inf.0[k]) & (w2.0[k] < inf.0[k])) as u8
+                    as f64
+            );
+            ok = map!(|k| ok.0[k] * pass.0[k]);
+        }
+    }
+    let mut all = ok.0.iter().all(|&x| x == 1.0);
+    for k in whole..n {
+        let (kv, kw) = kf[k];
+        let (vk, wk) = (v[k] + f[k] * kv, w[k] + t[k] * kw);
+        v[k] = vk;
+        w[k] = wk;
+        all &= plausible_motion(vk, wk, limit2);
+    }
+    all
+}
+
+/// `sum += rows`, coordinate by coordinate, leaving `rows` zero.
+#[inline(always)]
+fn add_and_zero(sum: &mut [DVec3], rows: &mut [DVec3]) {
+    let s: &mut [f64] = bytemuck::cast_slice_mut(sum);
+    let r: &mut [f64] = bytemuck::cast_slice_mut(rows);
+    for (s, r) in s.iter_mut().zip(r.iter_mut()) {
+        *s += std::mem::take(r);
+    }
+}
+
+#[cfg(test)]
+pub(super) mod tests {
+    use super::*;
+
+    /// Deterministic values of all magnitudes and both signs.
+    pub(in crate::sim) fn values(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed | 1;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let u = (s >> 11) as f64 / (1u64 << 53) as f64;
+            (u - 0.5) * 10f64.powi((s % 7) as i32 - 3)
+        }
+    }
+
+    /// One particle at a time, as the particle phase summed and kicked before the flat
+    /// loops: the oracle for their bits.
+    #[allow(clippy::too_many_arguments)]
+    fn one_at_a_time(
+        first: usize,
+        (f, t, v, w): (&mut [DVec3], &mut [DVec3], &mut [DVec3], &mut [DVec3]),
+        mass: &[f64],
+        kick: &[(f64, f64)],
+        gravity: DVec3,
+        blocks: &[(usize, Vec<DVec3>, Vec<DVec3>)],
+        walls: &ChunkWalls,
+        limit2: f64,
+    ) -> bool {
+        let mut all = true;
+        for k in 0..f.len() {
+            let i = first + k;
+            let mut fk = gravity * mass[k];
+            let mut tk = DVec3::ZERO;
+            for (start, bf, bt) in blocks {
+                if i >= *start && i < start + bf.len() {
+                    fk += bf[i - start];
+                    tk += bt[i - start];
+                }
+            }
+            for o in &walls.outs
+                [walls.start[k] as usize - walls.base..walls.start[k + 1] as usize - walls.base]
+            {
+                if o.adds {
+                    fk += o.force;
+                    tk += o.torque;
+                }
+            }
+            f[k] = fk;
+            t[k] = tk;
+            let (kv, kw) = kick[k];
+            v[k] += fk * kv;
+            w[k] += tk * kw;
+            all &= plausible_motion(v[k], w[k], limit2);
+        }
+        all
+    }
+
+    /// The first row whose bits differ, if any.
+    pub(in crate::sim) fn first_difference(a: &[DVec3], b: &[DVec3]) -> Option<usize> {
+        let bits = |v: &DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        assert_eq!(a.len(), b.len());
+        (0..a.len()).find(|&k| bits(&a[k]) != bits(&b[k]))
+    }
+
+    #[test]
+    fn the_flat_loops_give_the_bits_of_one_particle_at_a_time() {
+        let mut x = values(7);
+        let vec3 = |x: &mut dyn FnMut() -> f64| DVec3::new(x(), x(), x());
+        for (n, first) in [(128usize, 256usize), (77, 1024), (5, 0)] {
+            for fail in [false, true] {
+                let mass: Vec<f64> = (0..n).map(|_| x().abs() + 1e-3).collect();
+                let kick: Vec<(f64, f64)> = (0..n).map(|_| (x(), x())).collect();
+                let v0: Vec<DVec3> = (0..n).map(|_| vec3(&mut x)).collect();
+                let w0: Vec<DVec3> = (0..n).map(|_| vec3(&mut x)).collect();
+                // Three blocks: one over the whole chunk, two over parts of it.
+                let spans = [(first, n), (first + n / 3, n - n / 3), (first, n / 2)];
+                let mut blocks: Vec<(usize, Vec<DVec3>, Vec<DVec3>)> = spans
+                    .iter()
+                    .map(|&(s, len)| {
+                        let bf = (0..len).map(|_| vec3(&mut x)).collect();
+                        let bt = (0..len).map(|_| vec3(&mut x)).collect();
+                        (s, bf, bt)
+                    })
+                    .collect();
+                if fail {
+                    blocks[1].1[n / 2 - n / 3] = DVec3::new(f64::NAN, 0.0, 0.0);
+                }
+                // Wall outputs for every third particle, two for every ninth.
+                let mut start = vec![10u32];
+                let mut outs = vec![];
+                for k in 0..n {
+                    let count = (k % 3 == 0) as usize + (k % 9 == 0) as usize;
+                    for q in 0..count {
+                        outs.push(WallOut {
+                            force: vec3(&mut x),
+                            torque: vec3(&mut x),
+                            adds: q == 0 || k % 2 == 0,
+                        });
+                    }
+                    start.push(start[k] + count as u32);
+                }
+                let walls = ChunkWalls {
+                    outs: &outs,
+                    start: &start,
+                    base: 10,
+                };
+                let gravity = DVec3::new(0.1, -0.2, -9.81);
+                let limit2 = 1e12;
+
+                let (mut fa, mut ta) = (vec![DVec3::ONE; n], vec![DVec3::ONE; n]);
+                let (mut va, mut wa) = (v0.clone(), w0.clone());
+                let expected = one_at_a_time(
+                    first,
+                    (&mut fa, &mut ta, &mut va, &mut wa),
+                    &mass,
+                    &kick,
+                    gravity,
+                    &blocks,
+                    &walls,
+                    limit2,
+                );
+                assert_eq!(expected, !fail);
+
+                type Run = fn(ChunkSums, DVec3, &mut [SumRows], ChunkWalls, f64) -> bool;
+                let mut paths: Vec<(&str, Run)> = vec![("baseline", sum_and_kick_body)];
+                paths.push(("widest", sum_and_kick));
+                for (name, run) in paths {
+                    let (mut f, mut t) = (vec![DVec3::ONE; n], vec![DVec3::ONE; n]);
+                    let (mut v, mut w) = (v0.clone(), w0.clone());
+                    let mut sums = blocks.clone();
+                    let mut rows: Vec<SumRows> = sums
+                        .iter_mut()
+                        .map(|(s, bf, bt)| SumRows {
+                            start: *s,
+                            force: bf,
+                            torque: bt,
+                        })
+                        .collect();
+                    let passed = run(
+                        ChunkSums {
+                            first,
+                            f: &mut f,
+                            t: &mut t,
+                            v: &mut v,
+                            w: &mut w,
+                            mass: &mass,
+                            kick: Some(&kick),
+                        },
+                        gravity,
+                        &mut rows,
+                        ChunkWalls {
+                            outs: &outs,
+                            start: &start,
+                            base: 10,
+                        },
+                        limit2,
+                    );
+                    assert_eq!(passed, expected, "{name}, n {n}");
+                    for (what, got, want) in [
+                        ("force", &f, &fa),
+                        ("torque", &t, &ta),
+                        ("velocity", &v, &va),
+                        ("spin", &w, &wa),
+                    ] {
+                        assert_eq!(first_difference(got, want), None, "{name}, n {n}: {what}");
+                    }
+                    assert!(
+                        sums.iter()
+                            .all(|(_, bf, bt)| bf.iter().chain(bt).all(|s| *s == DVec3::ZERO)),
+                        "{name}: the block rows are left zero"
+                    );
+                }
+            }
+        }
+    }
+}
