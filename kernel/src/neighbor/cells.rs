@@ -93,6 +93,16 @@ impl CellGrid {
     /// one row of the 3 x 3 x 3 block are consecutive, so each row is one slice.
     #[inline]
     pub fn for_each_near_run(&self, p: DVec3, mut f: impl FnMut(&[u32])) {
+        let (runs, count, _) = self.near_runs(p);
+        runs[..count].iter().for_each(|run| f(run));
+    }
+
+    /// The runs of [`CellGrid::for_each_near_run`] at once: up to nine slices (fewer at
+    /// the grid's faces), the count of them, and how many points they hold together.
+    #[inline]
+    pub fn near_runs(&self, p: DVec3) -> ([&[u32]; 9], usize, usize) {
+        let mut runs: [&[u32]; 9] = [&[]; 9];
+        let (mut count, mut points) = (0, 0);
         let c = self.coords(p);
         let lo = |k: usize| c[k].saturating_sub(1);
         let hi = |k: usize| (c[k] + 1).min(self.dims[k] - 1);
@@ -100,9 +110,13 @@ impl CellGrid {
             for y in lo(1)..=hi(1) {
                 let row = (z * self.dims[1] + y) * self.dims[0];
                 let (a, b) = (row + lo(0), row + hi(0));
-                f(&self.items[self.start[a] as usize..self.start[b + 1] as usize]);
+                let run = &self.items[self.start[a] as usize..self.start[b + 1] as usize];
+                runs[count] = run;
+                count += 1;
+                points += run.len();
             }
         }
+        (runs, count, points)
     }
 
     /// Calls `f(j)` for every binned point in the 27 cells around `p`.

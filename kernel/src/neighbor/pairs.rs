@@ -117,22 +117,25 @@ impl PairList {
                     near.clear();
                     let (pi, ri) = (position[i], radius[i]);
                     let idi = id[i];
-                    grid.for_each_near_run(pi, |run| {
+                    // Room for every candidate at once: sized run by run, the vector's
+                    // bookkeeping and zero fill came nine times a particle.
+                    let (runs, count, points) = grid.near_runs(pi);
+                    near.resize(points, 0);
+                    let mut len = 0;
+                    for run in &runs[..count] {
                         // Whether a candidate is kept is close to a coin toss (about half
                         // have the larger id), which a branch predictor loses: write every
                         // candidate and advance past the kept ones only. 30 % off the search
                         // (BENCHMARKS.md, fifteenth sitting); the list is the same.
-                        let mut len = near.len();
-                        near.resize(len + run.len(), 0);
-                        for &j in run {
+                        for &j in *run {
                             let ju = j as usize;
                             let cut = ri + radius[ju] + extra;
                             let close = (position[ju] - pi).length_squared() < cut * cut;
                             near[len] = j;
                             len += ((id[ju] > idi) & close) as usize;
                         }
-                        near.truncate(len);
-                    });
+                    }
+                    near.truncate(len);
                     if let Some(keep) = keep {
                         for q in old.row_of(old_of_new.map_or(i, |m| m[i] as usize)) {
                             if keep(&old.history[q * stride..(q + 1) * stride]) {
