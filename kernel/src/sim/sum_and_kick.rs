@@ -11,7 +11,7 @@ use super::flat::{FLAT, GROUP, length_squared, load3, repeat3, spread3, store3};
 use super::pair_forces::SumRows;
 use super::plausible_motion;
 use super::wall_forces::WallOut;
-use crate::contact::lanes::{F, LANES, map};
+use crate::contact::lanes::{F, LANES, M, map};
 use glam::DVec3;
 
 /// One chunk's rows: particles `first..first + f.len()`.
@@ -136,7 +136,7 @@ fn sum_and_kick_body(
     let Some(kf) = kick else {
         return true;
     };
-    let mut ok = F::splat(1.0);
+    let mut ok = M::splat(true);
     {
         let vf: &mut [f64] = bytemuck::cast_slice_mut(&mut v[..whole]);
         let wf: &mut [f64] = bytemuck::cast_slice_mut(&mut w[..whole]);
@@ -154,17 +154,13 @@ fn sum_and_kick_body(
             }
             store3(vf, at, vs);
             store3(wf, at, ws);
-            // As `plausible_motion` tests, lane by lane; a failing lane zeroes its flag.
+            // As `plausible_motion` tests, lane by lane.
             let (v2, w2) = (length_squared(&vs), length_squared(&ws));
             let inf = F::splat(f64::INFINITY);
-            let pass = map!(
-                |k| ((v2.0[k] <= limit2) & (v2.0[k] < inf.0[k]) & (w2.0[k] < inf.0[k])) as u8
-                    as f64
-            );
-            ok = map!(|k| ok.0[k] * pass.0[k]);
+            ok = ok & v2.le(F::splat(limit2)) & v2.lt(inf) & w2.lt(inf);
         }
     }
-    let mut all = ok.0.iter().all(|&x| x == 1.0);
+    let mut all = !(!ok).any();
     for k in whole..n {
         let (kv, kw) = kf[k];
         let (vk, wk) = (v[k] + f[k] * kv, w[k] + t[k] * kw);
