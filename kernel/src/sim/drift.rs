@@ -3,7 +3,7 @@
 //! runs it in a pass of its own, or, within [`Simulation::run`], in the step before's
 //! particle phase as soon as a chunk's second half kick is done.
 
-use super::flat::{FLAT, GROUP, length_squared, load3, repeat3, spread3, store3};
+use super::flat::{FLAT, GROUP, length_squared, load3, on_widest, repeat3, spread3, store3};
 use super::{Aabb, CHUNK, Failure, Simulation, plausible_position};
 use crate::contact::lanes::{F, LANES, map};
 use glam::DVec3;
@@ -43,41 +43,17 @@ pub(super) struct ChunkMotion<'a> {
     pub x0: &'a [DVec3],
 }
 
-/// The first half kick and the drift of one chunk (v += F dt/2m, omega += T dt/2I,
-/// x += v dt), with its largest displacement from `x0` and the cheap position test: the
-/// chunk's bounding box, and a sum that is zero only if every coordinate is finite (x * 0 is
-/// NaN for an infinite or NaN x).
-///
-/// Compiled once per instruction set, as the pair phase is (`sim/pair_forces/lanes.rs`),
-/// and run on the CPU's widest. Each operation is the scalar one of each coordinate, so the
-/// state has the same bits on every path; the scan's results do not depend on the order in
-/// which it sees the coordinates (a NaN fails every comparison, in any order).
-#[inline]
-pub(super) fn kick_and_drift(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has the features the function is compiled for.
-            return unsafe { kick_and_drift_avx512(m, dt, dom) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: as above.
-            return unsafe { kick_and_drift_avx2(m, dt, dom) };
-        }
-    }
-    kick_and_drift_body(m, dt, dom)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,avx")]
-unsafe fn kick_and_drift_avx512(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
-    kick_and_drift_body(m, dt, dom)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx")]
-unsafe fn kick_and_drift_avx2(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift {
-    kick_and_drift_body(m, dt, dom)
+on_widest! {
+    /// The first half kick and the drift of one chunk (v += F dt/2m, omega += T dt/2I,
+    /// x += v dt), with its largest displacement from `x0` and the cheap position test: the
+    /// chunk's bounding box, and a sum that is zero only if every coordinate is finite (x * 0 is
+    /// NaN for an infinite or NaN x).
+    ///
+    /// Compiled once per instruction set, as the pair phase is (`sim/pair_forces/lanes.rs`),
+    /// and run on the CPU's widest. Each operation is the scalar one of each coordinate, so the
+    /// state has the same bits on every path; the scan's results do not depend on the order in
+    /// which it sees the coordinates (a NaN fails every comparison, in any order).
+    pub(super) fn kick_and_drift(m: ChunkMotion, dt: f64, dom: Aabb) -> Drift => kick_and_drift_body
 }
 
 /// Inlined into each instruction set's copy above.

@@ -7,6 +7,40 @@
 
 use crate::contact::lanes::{F, LANES, map};
 
+/// Defines `$vis fn $name(args) -> $ret` running `$body(args)` compiled for the CPU's widest
+/// instruction set (AVX-512, AVX2 or the baseline), picked at run time, as the pair phase
+/// picks its lanes: the flat loops become vector instructions of that width. `$body` must be
+/// `#[inline(always)]` so that each copy compiles it with its own features.
+macro_rules! on_widest {
+    ($(#[$doc:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty => $body:ident) => {
+        $(#[$doc])*
+        #[inline]
+        $vis fn $name($($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,avx")]
+                unsafe fn avx512($($arg: $ty),*) -> $ret {
+                    $body($($arg),*)
+                }
+                #[target_feature(enable = "avx2,avx")]
+                unsafe fn avx2($($arg: $ty),*) -> $ret {
+                    $body($($arg),*)
+                }
+                if std::arch::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: the CPU has the features the function is compiled for.
+                    return unsafe { avx512($($arg),*) };
+                }
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: as above.
+                    return unsafe { avx2($($arg),*) };
+                }
+            }
+            $body($($arg),*)
+        }
+    };
+}
+pub(super) use on_widest;
+
 /// Particles per group.
 pub(super) const GROUP: usize = LANES;
 /// Coordinates per group.

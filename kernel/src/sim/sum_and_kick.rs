@@ -7,7 +7,7 @@
 //! same operations in the same order as one particle at a time, so the bits are the same
 //! on every path and thread count.
 
-use super::flat::{FLAT, GROUP, length_squared, load3, repeat3, spread3, store3};
+use super::flat::{FLAT, GROUP, length_squared, load3, on_widest, repeat3, spread3, store3};
 use super::pair_forces::SumRows;
 use super::plausible_motion;
 use super::wall_forces::WallOut;
@@ -35,52 +35,16 @@ pub(super) struct ChunkWalls<'a> {
     pub base: usize,
 }
 
-/// Sums and kicks one chunk, leaving each block's rows zero; returns whether every kicked
-/// particle passed the velocity half of the cheap test.
-#[inline]
-pub(super) fn sum_and_kick(
-    c: ChunkSums,
-    gravity: DVec3,
-    blocks: &mut [SumRows],
-    walls: ChunkWalls,
-    limit2: f64,
-) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has the features the function is compiled for.
-            return unsafe { sum_and_kick_avx512(c, gravity, blocks, walls, limit2) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: as above.
-            return unsafe { sum_and_kick_avx2(c, gravity, blocks, walls, limit2) };
-        }
-    }
-    sum_and_kick_body(c, gravity, blocks, walls, limit2)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,avx")]
-unsafe fn sum_and_kick_avx512(
-    c: ChunkSums,
-    gravity: DVec3,
-    blocks: &mut [SumRows],
-    walls: ChunkWalls,
-    limit2: f64,
-) -> bool {
-    sum_and_kick_body(c, gravity, blocks, walls, limit2)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx")]
-unsafe fn sum_and_kick_avx2(
-    c: ChunkSums,
-    gravity: DVec3,
-    blocks: &mut [SumRows],
-    walls: ChunkWalls,
-    limit2: f64,
-) -> bool {
-    sum_and_kick_body(c, gravity, blocks, walls, limit2)
+on_widest! {
+    /// Sums and kicks one chunk, leaving each block's rows zero; returns whether every kicked
+    /// particle passed the velocity half of the cheap test.
+    pub(super) fn sum_and_kick(
+        c: ChunkSums,
+        gravity: DVec3,
+        blocks: &mut [SumRows],
+        walls: ChunkWalls,
+        limit2: f64,
+    ) -> bool => sum_and_kick_body
 }
 
 /// Inlined into each instruction set's copy above.
