@@ -571,8 +571,14 @@ impl Simulation {
     fn sort_particles(&mut self) {
         let p = &self.particles;
         let r_max = p.radius.iter().copied().fold(0.0, f64::max);
-        // Cells from the particle size alone, so the order does not depend on the skin.
-        let grid = crate::neighbor::CellGrid::build(&p.position, 2.0 * r_max);
+        // Cells from the particle size alone, so the order does not depend on the skin (nor
+        // the bits: a test runs two skins). A quarter over the diameter, so that the cut of
+        // the usual skins (up to half a radius) spans one layer of cells, not two: in cells
+        // of one diameter a partner could lie two layers away in index, and each block of
+        // the pair schedule reached twice as far beyond its rows (settled bed: 2.1 partial
+        // sums a particle in cells of 2 r, 1.8 in cells of 2.5 r; BENCHMARKS.md,
+        // twenty-eighth sitting).
+        let grid = crate::neighbor::CellGrid::build(&p.position, 2.5 * r_max);
         let order = grid.cell_order().to_vec();
         self.particles.permute(&order);
         self.refresh_kick_factor();
