@@ -11,10 +11,11 @@ pub struct CellGrid {
     /// cell order they are up to about one layer's particles away in index. That distance
     /// sets how far each pair-phase block reaches beyond its own rows, and so how many
     /// partial sums a particle has (`PairSchedule`). So the slowest axis is the one whose
-    /// fullest layer holds the fewest points, and the fastest the one of fewer cells of the
-    /// other two. A settled bed 60 x 60 mm wide and 40 mm deep, in cells of 2 mm: layers
-    /// across x of 30 x 20 cells, where layers across z hold 30 x 30 (the bounding box
-    /// does not show it while a few particles are still falling above the bed).
+    /// layers hold the fewest points, as each point sees its own (see [`axis_order`]), and
+    /// the fastest the one of fewer cells of the other two. A settled bed 60 x 60 mm wide
+    /// and 40 mm deep, in cells of 2.5 mm: layers across x of 24 x 16 cells, where layers
+    /// across z hold 24 x 24 (its bounding box does not show it while a few particles are
+    /// still falling far above the bed).
     axes: [usize; 3],
     /// Particles of cell c are `items[start[c]..start[c + 1]]`, in ascending index.
     start: Vec<u32>,
@@ -140,9 +141,11 @@ impl CellGrid {
     }
 }
 
-/// The linear order's axes, fastest first (see [`CellGrid`]'s `axes`): the slowest has the
-/// smallest fullest layer (ties: z, then y, then x, the order before this choice), the
-/// fastest the fewer cells of the other two (ties: the lower axis).
+/// The linear order's axes, fastest first (see [`CellGrid`]'s `axes`). The slowest is the
+/// axis whose layers' counts have the smallest sum of squares: the sum, over the points, of
+/// the count of each point's own layer, which is what a block of rows reaches past its own
+/// (ties: z, then y, then x, the order before this choice). The fastest is the one of fewer
+/// cells of the other two (ties: the lower axis).
 fn axis_order(points: &[DVec3], lo: DVec3, inv_cell: f64, dims: [usize; 3]) -> [usize; 3] {
     let mut count: [Vec<u32>; 3] = dims.map(|d| vec![0; d]);
     for p in points {
