@@ -11,7 +11,7 @@ pub struct CellGrid {
     /// cell order they are up to about one layer's particles away in index. That distance
     /// sets how far each pair-phase block reaches beyond its own rows, and so how many
     /// partial sums a particle has (`PairSchedule`). So the slowest axis is the one whose
-    /// layers hold the fewest points, as each point sees its own (see [`axis_order`]), and
+    /// layers hold the fewest points, as each point sees its own (see `axis_order`), and
     /// the fastest the one of fewer cells of the other two. A settled bed 60 x 60 mm wide
     /// and 40 mm deep, in cells of 2.5 mm: layers across x of 24 x 16 cells, where layers
     /// across z hold 24 x 24 (its bounding box does not show it while a few particles are
@@ -54,16 +54,16 @@ impl CellGrid {
         let d = (extent / cell).floor() + DVec3::ONE;
         let dims = [d.x as usize, d.y as usize, d.z as usize];
         let inv_cell = 1.0 / cell;
-        let axes = axis_order(points, lo, inv_cell, dims);
         let ncell = dims[0] * dims[1] * dims[2];
         let mut grid = CellGrid {
             origin: lo,
             inv_cell,
             dims,
-            axes,
+            axes: [0, 1, 2],
             start: vec![0; ncell + 1],
             items: vec![0; points.len()],
         };
+        grid.axes = grid.axis_order(points);
         let cells: Vec<u32> = points
             .iter()
             .map(|p| grid.linear(grid.coords(*p)) as u32)
@@ -141,29 +141,32 @@ impl CellGrid {
     }
 }
 
-/// The linear order's axes, fastest first (see [`CellGrid`]'s `axes`). The slowest is the
-/// axis whose layers' counts have the smallest sum of squares: the sum, over the points, of
-/// the count of each point's own layer, which is what a block of rows reaches past its own
-/// (ties: z, then y, then x, the order before this choice). The fastest is the one of fewer
-/// cells of the other two (ties: the lower axis).
-fn axis_order(points: &[DVec3], lo: DVec3, inv_cell: f64, dims: [usize; 3]) -> [usize; 3] {
-    let mut count: [Vec<u32>; 3] = dims.map(|d| vec![0; d]);
-    for p in points {
-        let q = (*p - lo) * inv_cell;
-        for a in 0..3 {
-            count[a][(q[a].max(0.0) as usize).min(dims[a] - 1)] += 1;
+impl CellGrid {
+    /// The linear order's axes, fastest first (see [`CellGrid`]'s `axes`). The slowest is
+    /// the axis whose layers' counts have the smallest sum of squares: the sum, over the
+    /// points, of the count of each point's own layer, which is what a block of rows reaches
+    /// past its own (ties: z, then y, then x, the order before this choice). The fastest is
+    /// the one of fewer cells of the other two (ties: the lower axis).
+    fn axis_order(&self, points: &[DVec3]) -> [usize; 3] {
+        let dims = self.dims;
+        let mut count: [Vec<u32>; 3] = dims.map(|d| vec![0; d]);
+        for p in points {
+            let c = self.coords(*p);
+            for a in 0..3 {
+                count[a][c[a]] += 1;
+            }
         }
+        // The sum of squares: each point's own layer's count, summed over the points.
+        let seen = count.map(|c| c.into_iter().map(|k| (k as u64).pow(2)).sum::<u64>());
+        let slow = [2, 1, 0]
+            .into_iter()
+            .min_by_key(|&a| seen[a])
+            .expect("three axes");
+        let mut rest = [0, 1, 2].into_iter().filter(|&a| a != slow);
+        let (a, b) = (rest.next().unwrap(), rest.next().unwrap());
+        let (fast, mid) = if dims[b] < dims[a] { (b, a) } else { (a, b) };
+        [fast, mid, slow]
     }
-    // The sum of squares: each point's own layer's count, summed over the points.
-    let seen = count.map(|c| c.into_iter().map(|k| (k as u64).pow(2)).sum::<u64>());
-    let slow = [2, 1, 0]
-        .into_iter()
-        .min_by_key(|&a| seen[a])
-        .expect("three axes");
-    let mut rest = [0, 1, 2].into_iter().filter(|&a| a != slow);
-    let (a, b) = (rest.next().unwrap(), rest.next().unwrap());
-    let (fast, mid) = if dims[b] < dims[a] { (b, a) } else { (a, b) };
-    [fast, mid, slow]
 }
 
 #[cfg(test)]
