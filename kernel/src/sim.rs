@@ -739,12 +739,8 @@ impl Simulation {
             model,
             stride,
             dt,
-            // Bonds are evaluated by the scalar pipeline only.
-            path: if model.has_bond() {
-                PairPath::OneByOne
-            } else {
-                self.pair_path
-            },
+            // Walls bond to nothing: every model runs them on the pair phase's path.
+            path: self.pair_path,
         };
         let (radius, mass, inertia, material) = (&p.radius, &p.mass, &p.inertia, &p.material);
         let limit2 = self.speed_limit * self.speed_limit;
@@ -981,7 +977,17 @@ impl Simulation {
         );
         let sums = &mut self.pair_sums;
         let times = (self.dt, self.time);
-        add_pair_forces(p, model, pairs, schedule, sums, times, self.pair_path, team)
+        // Bonds are evaluated one at a time: once bonds are formed, a model runs its whole
+        // pair phase so. Before (a bonded sample's filling and compaction; a model whose bond
+        // law never forms a bond, as in a repose test) no pair holds a bond, and the lanes
+        // give the bits of the scalar pipeline. (A lane form of the bond law, tried, was
+        // 11 % slower on the UCS test: BENCHMARKS.md, thirtieth sitting.)
+        let path = if self.bonded {
+            PairPath::OneByOne
+        } else {
+            self.pair_path
+        };
+        add_pair_forces(p, model, pairs, schedule, sums, times, path, team)
     }
 
     /// How the pair phase evaluates touching contacts: [`crate::contact::LANES`] at a time

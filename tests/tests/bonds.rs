@@ -15,7 +15,7 @@ use glam::DVec3;
 use std::f64::consts::PI;
 use tilth_kernel::contact::{BondLoads, BondState, ContactModel, ModelSpec};
 use tilth_kernel::particles::Particles;
-use tilth_kernel::sim::{Setup, Simulation};
+use tilth_kernel::sim::{PairPath, Setup, Simulation};
 
 /// Normal and shear stiffness per unit area, N/m^3.
 const S_N: f64 = 1e10;
@@ -519,6 +519,77 @@ fn bonded_block(threads: usize, skin: f64) -> Simulation {
     .unwrap();
     assert_eq!(s.form_bonds(), 2_700);
     s
+}
+
+/// A model with a bond law runs its pairs in lanes until bonds are formed, and one at a
+/// time after; its wall contacts always in lanes. Both give the bits of every contact one
+/// at a time: a 10 x 10 x 10 lattice of the study's laws (JKR, EPSD rolling, Mindlin,
+/// restitution damping, parallel bonds) lands on a floor at 2 m/s unbonded, then is bonded
+/// where it lies and goes on settling.
+#[test]
+fn a_bonded_model_runs_in_lanes_until_bonds_form_with_the_bits_of_one_at_a_time() {
+    let spec = ModelSpec {
+        extra: vec!["bond".into()],
+        ..spec("jkr", Some("restitution"), Some("mindlin"), Some("epsd"))
+    };
+    let m = || {
+        model(
+            &spec,
+            &[
+                ("restitution", 0.5),
+                ("friction", 0.5),
+                ("surface_energy", 0.356),
+                ("rolling_friction", 0.15),
+                ("normal_stiffness_per_area", S_N),
+                ("shear_stiffness_per_area", S_T),
+                ("critical_normal_stress", 3e4),
+                ("critical_shear_stress", 3e4),
+            ],
+        )
+    };
+    let paths = [(PairPath::Lanes, 2), (PairPath::OneByOne, 1)];
+    let mut runs: Vec<Simulation> = paths
+        .iter()
+        .map(|&(path, threads)| {
+            let mut p = lattice((10, 10, 10), 2.02 * R);
+            for k in 0..p.len() {
+                p.position[k] += DVec3::new(-0.01, -0.01, 2.0 * R);
+                p.velocity[k] = DVec3::new(0.0, 0.0, -2.0);
+            }
+            let mut s = Simulation::new(Setup {
+                model: m(),
+                particles: p,
+                walls: vec![floor()],
+                factories: vec![],
+                dt: 2e-6,
+                gravity: DVec3::new(0.0, 0.0, -9.81),
+                skin: 4e-4,
+                threads,
+                domain: domain(1.0),
+            })
+            .unwrap();
+            s.set_pair_path(path);
+            s
+        })
+        .collect();
+    let mut most = (0, 0);
+    for round in 0..40 {
+        if round == 20 {
+            let formed: Vec<usize> = runs.iter_mut().map(|s| s.form_bonds()).collect();
+            assert!(formed[0] > 500 && formed[0] == formed[1], "{formed:?}");
+        }
+        for s in &mut runs {
+            s.run(100).unwrap();
+        }
+        let step = runs[0].step;
+        assert_eq!(runs[0].state_hash(), runs[1].state_hash(), "step {step}");
+        assert_eq!(runs[0].bonds(), runs[1].bonds(), "step {step}");
+        let (pairs, walls) = runs[0].contact_counts();
+        most = (most.0.max(pairs), most.1.max(walls));
+    }
+    // The lattice landed and packed (particle and wall contacts in lanes) before it was
+    // bonded.
+    assert!(most.0 > 500 && most.1 > 50, "at most {most:?} contacts");
 }
 
 #[test]

@@ -21,8 +21,9 @@
 //! The pair phase runs the pipeline on [`LANES`] touching contacts at once
 //! ([`ContactModel::evaluate_lanes`]): each slot's trait has a lane form beside its scalar
 //! one, which must give the scalar form's bits lane by lane, and which by default runs the
-//! scalar form on each lane (see [`lanes`] and `kernel/ADDING_A_LAW.md`). Walls, bonds and
-//! contacts that may end run the scalar pipeline.
+//! scalar form on each lane (see [`lanes`] and `kernel/ADDING_A_LAW.md`); wall contacts too.
+//! Contacts that may end run the scalar pipeline, and so do bonds: once bonds are formed,
+//! a simulation runs its pairs one at a time.
 //!
 //! Sign conventions: the unit normal `n` points from particle i to particle j (or the wall);
 //! the overlap `delta_n > 0` in contact; normal forces returned by laws are positive when

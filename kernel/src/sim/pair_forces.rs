@@ -118,6 +118,9 @@ pub(super) fn add_pair_forces(
         ..
     } = pairs;
     let stride = *stride;
+    // Bonds are evaluated by the scalar pipeline only: the simulation picks `OneByOne` once
+    // bonds are formed.
+    debug_assert!(path == PairPath::OneByOne || !pairs_hold_bonds(model, history, stride));
     // Sized at a new schedule only, with an eighth to spare rather than doubling: at
     // 100,000 particles they are 10 MB. Zero, as the last particle phase left them, so
     // only what they grow by needs zeroing (all of it was, serially, at every rebuild).
@@ -155,18 +158,20 @@ pub(super) fn add_pair_forces(
         dt,
         time,
     };
-    // Bonds are evaluated by the scalar pipeline only.
-    let path = if model.has_bond() {
-        PairPath::OneByOne
-    } else {
-        path
-    };
     map_items(team, tasks, |_, (block, h, f, t)| match path {
         PairPath::OneByOne => ctx.block(block, h, f, t),
         lanes => ctx.block_lanes(lanes, block, h, f, t),
     })
     .into_iter()
     .sum()
+}
+
+/// Whether any history row holds an intact bond (for a debug check).
+fn pairs_hold_bonds(model: &ContactModel, history: &[f64], stride: usize) -> bool {
+    model.has_bond()
+        && history
+            .chunks_exact(stride)
+            .any(|row| model.bond_intact(row))
 }
 
 /// What every block reads.

@@ -11,7 +11,11 @@
 //! Reference: Ai, Chen, Rotter, Ooi (2011) Powder Technol. 206:269-282, model C.
 
 use crate::contact::laws::cdt::ROLLING_FRICTION;
-use crate::contact::{BuiltLaw, Contact, LawEntry, LawInput, NormalForce, RollingLaw, Slot};
+use crate::contact::contact_lanes::rotate_into_plane_lanes;
+use crate::contact::{
+    BuiltLaw, Contact, ContactLanes, F, LawEntry, LawInput, NormalForce, NormalForceLanes,
+    RollingLaw, Slot, V,
+};
 use crate::param::{Bound, ParamSpec};
 use crate::contact::geometry::rotate_into_plane;
 use glam::DVec3;
@@ -73,6 +77,35 @@ impl RollingLaw for Epsd {
             let i_r = 1.0 / (inv(c.inertia_i, c.mass_i, c.arm_i) + inv(c.inertia_j, c.mass_j, c.arm_j));
             total -= self.eta_r * 2.0 * (i_r * k_r).sqrt() * w_r;
         }
+        h[0] = m.x;
+        h[1] = m.y;
+        h[2] = m.z;
+        (total, -total)
+    }
+
+    /// [`Epsd::torques`] in lanes, operation for operation: each branch becomes a select.
+    #[inline(always)]
+    fn torques_lanes(&self, c: &ContactLanes, normal: &NormalForceLanes, load: F, h: &mut [F]) -> (V, V) {
+        let n = c.normal;
+        // `powi(2)` is one multiplication, as here.
+        let mu_r_eff = self.mu_r * c.r_eff;
+        let k_r = 2.25 * normal.stiffness * (mu_r_eff * mu_r_eff);
+        let w = c.omega_i - c.omega_j;
+        let w_r = w - n * n.dot(w);
+        let mut m = rotate_into_plane_lanes(V { x: h[0], y: h[1], z: h[2] }, n);
+        m -= w_r * k_r * c.dt;
+        let m_max = self.mu_r * c.r_eff * load;
+        let m2 = m.length_squared();
+        let capped = m2.gt(m_max * m_max);
+        let inv = |i: F, mass: F, d: F| F::select(i.is_finite(), 1.0 / (i + mass * d * d), F::ZERO);
+        let i_r = 1.0 / (inv(c.inertia_i, c.mass_i, c.arm_i) + inv(c.inertia_j, c.mass_j, c.arm_j));
+        let dashpot = w_r * (self.eta_r * 2.0 * (i_r * k_r).sqrt());
+        m = V::select(capped, m * (m_max / m2.sqrt()), m);
+        let total = V::select(capped, m, m - dashpot);
+        // No stiffness: no torque, and the spring is forgotten (a NaN goes on, as there).
+        let live = !k_r.le(F::ZERO);
+        let m = V::select(live, m, V::ZERO);
+        let total = V::select(live, total, V::ZERO);
         h[0] = m.x;
         h[1] = m.y;
         h[2] = m.z;

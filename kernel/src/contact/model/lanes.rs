@@ -19,8 +19,9 @@ impl ContactModel {
     /// Evaluates lanes `0..c.count` of `c`, contacts between materials a and b that all
     /// touch (`overlap > 0`), as [`ContactModel::evaluate`] would one by one; `history[v]`
     /// holds value `v` of each lane's history row. Marks each contact established. `None`
-    /// (and the history untouched) when the pair has no laws. Bonds are not evaluated here:
-    /// a model with a bond law runs the scalar pipeline.
+    /// (and the history untouched) when the pair has no laws. Bonds are not evaluated here,
+    /// and a row's bond block is left as it is: the simulation runs its pairs one at a time
+    /// once bonds are formed, and a wall never bonds.
     #[inline(always)]
     pub fn evaluate_lanes(
         &self,
@@ -29,7 +30,6 @@ impl ContactModel {
         c: &ContactLanes,
         history: &mut [F],
     ) -> Option<ContactOutLanes> {
-        debug_assert!(self.layout.bond.is_none());
         let laws = self.pairs[a * self.materials.len() + b].as_ref()?;
         let l = &self.layout;
         history[ACTIVE] = F::splat(1.0);
