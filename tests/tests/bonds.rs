@@ -500,12 +500,20 @@ fn bonded_block(threads: usize, skin: f64) -> Simulation {
             ("critical_shear_stress", 3e4),
         ],
     );
+    let mut s = falling_lattice(m, 1.0, threads, skin);
+    assert_eq!(s.form_bonds(), 2_700);
+    s
+}
+
+/// A 10 x 10 x 10 lattice of spheres 2.02 R apart, unbonded, falling at `speed` (m/s) just
+/// above a floor.
+fn falling_lattice(m: ContactModel, speed: f64, threads: usize, skin: f64) -> Simulation {
     let mut p = lattice((10, 10, 10), 2.02 * R);
     for k in 0..p.len() {
         p.position[k] += DVec3::new(-0.01, -0.01, 2.0 * R);
-        p.velocity[k] = DVec3::new(0.0, 0.0, -1.0);
+        p.velocity[k] = DVec3::new(0.0, 0.0, -speed);
     }
-    let mut s = Simulation::new(Setup {
+    Simulation::new(Setup {
         model: m,
         particles: p,
         walls: vec![floor()],
@@ -516,9 +524,7 @@ fn bonded_block(threads: usize, skin: f64) -> Simulation {
         threads,
         domain: domain(1.0),
     })
-    .unwrap();
-    assert_eq!(s.form_bonds(), 2_700);
-    s
+    .unwrap()
 }
 
 /// A model with a bond law runs its pairs in lanes until bonds are formed, and one at a
@@ -551,23 +557,7 @@ fn a_bonded_model_runs_in_lanes_until_bonds_form_with_the_bits_of_one_at_a_time(
     let mut runs: Vec<Simulation> = paths
         .iter()
         .map(|&(path, threads)| {
-            let mut p = lattice((10, 10, 10), 2.02 * R);
-            for k in 0..p.len() {
-                p.position[k] += DVec3::new(-0.01, -0.01, 2.0 * R);
-                p.velocity[k] = DVec3::new(0.0, 0.0, -2.0);
-            }
-            let mut s = Simulation::new(Setup {
-                model: m(),
-                particles: p,
-                walls: vec![floor()],
-                factories: vec![],
-                dt: 2e-6,
-                gravity: DVec3::new(0.0, 0.0, -9.81),
-                skin: 4e-4,
-                threads,
-                domain: domain(1.0),
-            })
-            .unwrap();
+            let mut s = falling_lattice(m(), 2.0, threads, 4e-4);
             s.set_pair_path(path);
             s
         })
@@ -587,8 +577,7 @@ fn a_bonded_model_runs_in_lanes_until_bonds_form_with_the_bits_of_one_at_a_time(
         let (pairs, walls) = runs[0].contact_counts();
         most = (most.0.max(pairs), most.1.max(walls));
     }
-    // The lattice landed and packed (particle and wall contacts in lanes) before it was
-    // bonded.
+    // The lattice landed and packed: particle and wall contacts, in lanes until bonded.
     assert!(most.0 > 500 && most.1 > 50, "at most {most:?} contacts");
 }
 
