@@ -41,6 +41,50 @@ thread_local! {
     static CANDIDATES: std::cell::Cell<Vec<u32>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
+/// Writes to `out` the block's pairs that may interact, in list order, and returns how
+/// many: the position `k` of each in the block's list, with bit 31 set when it surely
+/// touches (see [`SURELY_TOUCHING`]). `first`, `partner` and the history rows are the
+/// block's. The scalar loop's test (a model with bonds does not come here), negated as
+/// written there, NaN included.
+///
+/// A small function of its own, not inlined into the block: inside it, the compiler ran
+/// short of registers and reloaded the slices from the stack at every pair.
+#[inline(never)]
+fn find_candidates(
+    first: &[u32],
+    partner: &[u32],
+    position: &[DVec3],
+    radius: &[f64],
+    (history, stride): (&[f64], usize),
+    out: &mut [u32],
+) -> usize {
+    let len = first.len();
+    assert!(partner.len() == len && out.len() >= len && history.len() >= len * stride);
+    let np = position.len().min(radius.len());
+    let mut n = 0;
+    // Without a branch: whether a listed pair interacts is close to a coin toss, which the
+    // branch predictor loses.
+    for k in 0..len {
+        let (i, j) = (first[k] as usize, partner[k] as usize);
+        assert!(i.max(j) < np);
+        // SAFETY: `i, j < np` (checked above), `k < len` with `out.len() >= len` and
+        // `k * stride + ACTIVE < len * stride <= history.len()` (checked before the loop).
+        unsafe {
+            let d = *position.get_unchecked(j) - *position.get_unchecked(i);
+            let rsum = radius.get_unchecked(i) + radius.get_unchecked(j);
+            let (dist2, rr) = (d.length_squared(), rsum * rsum);
+            // `&`, not `&&`: both sides are cheap, and a second branch would be mispredicted.
+            let skip = (*history.get_unchecked(k * stride + ACTIVE) == 0.0) & (dist2 >= rr);
+            // Touching for certain, as `Contact` decides it (`r_i + r_j - |d| > 0` and
+            // `|d| != 0`), without the square root: see [`SURELY_TOUCHING`].
+            let surely = (dist2 > 0.0) & (dist2 < rr * SURELY_TOUCHING);
+            *out.get_unchecked_mut(n) = k as u32 | (surely as u32) << 31;
+            n += !skip as usize;
+        }
+    }
+    n
+}
+
 impl Ctx<'_> {
     /// [`Ctx::block`] through the lanes, on the widest vector instructions the CPU has that
     /// `path` allows.
@@ -108,23 +152,14 @@ impl Ctx<'_> {
         let mut candidates = CANDIDATES.take();
         candidates.clear();
         candidates.resize(end - base, 0);
-        // First the pairs that may interact, without a branch: whether a listed pair does is
-        // close to a coin toss, which the branch predictor loses. The scalar loop's test
-        // (a model with bonds does not come here), negated as written there, NaN included.
-        let mut n = 0;
-        for k in base..end {
-            let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
-            let d = p.position[j] - p.position[i];
-            let rsum = p.radius[i] + p.radius[j];
-            let (dist2, rr) = (d.length_squared(), rsum * rsum);
-            // `&`, not `&&`: both sides are cheap, and a second branch would be mispredicted.
-            let skip = (history[(k - base) * stride + ACTIVE] == 0.0) & (dist2 >= rr);
-            // Touching for certain, as `Contact` decides it (`r_i + r_j - |d| > 0` and
-            // `|d| != 0`), without the square root: see [`SURELY_TOUCHING`].
-            let surely = (dist2 > 0.0) & (dist2 < rr * SURELY_TOUCHING);
-            candidates[n] = (k - base) as u32 | (surely as u32) << 31;
-            n += !skip as usize;
-        }
+        let n = find_candidates(
+            &self.first[base..end],
+            &self.partner[base..end],
+            &p.position,
+            &p.radius,
+            (&history[..], stride),
+            &mut candidates,
+        );
         let mut carrying = 0;
         let mut lanes_history = vec![F::ZERO; stride];
         let mut batch = Batch {
