@@ -60,6 +60,7 @@ fn find_candidates(
 ) -> usize {
     let len = first.len();
     assert!(partner.len() == len && out.len() >= len && history.len() >= len * stride);
+    assert!(ACTIVE < stride);
     let np = position.len().min(radius.len());
     let mut n = 0;
     // Without a branch: whether a listed pair interacts is close to a coin toss, which the
@@ -68,7 +69,8 @@ fn find_candidates(
         let (i, j) = (first[k] as usize, partner[k] as usize);
         assert!(i.max(j) < np);
         // SAFETY: `i, j < np` (checked above), `k < len` with `out.len() >= len` and
-        // `k * stride + ACTIVE < len * stride <= history.len()` (checked before the loop).
+        // `k * stride + ACTIVE < (k + 1) * stride <= len * stride <= history.len()` (checked
+        // before the loop).
         unsafe {
             let d = *position.get_unchecked(j) - *position.get_unchecked(i);
             let rsum = radius.get_unchecked(i) + radius.get_unchecked(j);
