@@ -47,8 +47,8 @@ thread_local! {
 /// block's. The scalar loop's test (a model with bonds does not come here), negated as
 /// written there, NaN included.
 ///
-/// A small function of its own, not inlined into the block: inside it, the compiler ran
-/// short of registers and reloaded the slices from the stack at every pair.
+/// A small function of its own, not inlined into the block: inside the block's body, the
+/// compiler ran short of registers and reloaded the slices from the stack at every pair.
 #[inline(never)]
 fn find_candidates(
     first: &[u32],
@@ -68,7 +68,7 @@ fn find_candidates(
     for k in 0..len {
         let (i, j) = (first[k] as usize, partner[k] as usize);
         assert!(i.max(j) < np);
-        // SAFETY: `i, j < np` (checked above), `k < len` with `out.len() >= len` and
+        // SAFETY: `i, j < np` (checked above), `n <= k < len <= out.len()` and
         // `k * stride + ACTIVE < (k + 1) * stride <= len * stride <= history.len()` (checked
         // before the loop).
         unsafe {
