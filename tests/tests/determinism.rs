@@ -275,8 +275,9 @@ fn timing_the_pair_phase_changes_nothing() {
 }
 
 /// The pair phase and the wall contacts (floor, ring, funnel) evaluate touching contacts in
-/// lanes, on AVX-512, AVX2 or SSE2, or one at a time: the same bits, through the pour's new
-/// contacts, ending contacts, reorders and
+/// lanes, on AVX-512, AVX2 or SSE2, through the model's compiled law set or the slots'
+/// enums, or one at a time: the same bits, through the pour's new contacts, ending
+/// contacts, reorders and
 /// rebuilds, with laws whose lane forms run their scalar forms (JKR, EPSD) and laws with
 /// lane forms of their own (the settling bed's Hertz, Mindlin, CDT, SJKR), on 1 and 2
 /// threads. (On a CPU without AVX-512 or AVX2, those paths fall back to the next one.)
@@ -286,6 +287,7 @@ fn contacts_in_lanes_give_the_bits_of_one_at_a_time() {
         (PairPath::Lanes, 2),
         (PairPath::LanesAvx2, 1),
         (PairPath::LanesBaseline, 2),
+        (PairPath::LanesEnums, 1),
         (PairPath::OneByOne, 1),
     ];
     for (name, m) in [

@@ -13,6 +13,11 @@
 //! default ones included, or the enum would run the default instead of a law's override:
 //! the lists sit in `laws/mod.rs`, and each trait's doc points there.
 
+/// A law type inside its slot's enum: `Some` when `any` holds this law.
+pub trait OfAny<A> {
+    fn of_any(any: &A) -> Option<&Self>;
+}
+
 /// `law_enum!(AnyNormal: NormalLaw [Hertz(hertz::Hertz) ...] { fn force(&self, ...) -> T; ... })`
 macro_rules! law_enum {
     ($(#[$doc:meta])* $enum:ident: $trait:ident $variants:tt {
@@ -37,6 +42,15 @@ macro_rules! law_enum {
             impl From<$ty> for $enum {
                 fn from(law: $ty) -> Self {
                     $enum::$var(law)
+                }
+            }
+            impl $crate::contact::dispatch::OfAny<$enum> for $ty {
+                #[allow(unreachable_patterns)]
+                fn of_any(any: &$enum) -> Option<&Self> {
+                    match any {
+                        $enum::$var(law) => Some(law),
+                        _ => None,
+                    }
                 }
             }
         )*

@@ -32,7 +32,7 @@
 pub mod contact_lanes;
 pub mod geometry;
 #[macro_use]
-mod dispatch;
+pub(crate) mod dispatch;
 pub mod lanes;
 pub mod laws;
 pub mod model;

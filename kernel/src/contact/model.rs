@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 
 mod lanes;
-pub use lanes::ContactOutLanes;
+pub use lanes::{ContactOutLanes, TypedLaws, TypedModel};
 
 /// Which law fills each slot (names from the registry). `damping`, `tangential` and
 /// `rolling` may be left empty (no damping, frictionless, no rolling resistance).

@@ -11,14 +11,19 @@ use crate::particles::Particles;
 use glam::DVec3;
 
 mod lanes;
+mod law_sets;
 
 /// How the pair phase and the wall contacts evaluate touching contacts. Every path gives
 /// the same bits; the choice is there to show it, and to time one against another.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum PairPath {
-    /// In lanes, on the widest vector instructions the CPU has (the default).
+    /// In lanes, on the widest vector instructions the CPU has (the default), through the
+    /// model's compiled law set if it has one (`pair_forces/law_sets.rs`).
     #[default]
     Lanes,
+    /// As [`PairPath::Lanes`], but through the slots' enums even where the model's law set
+    /// is compiled as its own.
+    LanesEnums,
     /// In lanes, on AVX2 at most (as on CPUs without AVX-512).
     LanesAvx2,
     /// In lanes, on the instructions every x86-64 CPU has (SSE2).
@@ -151,6 +156,10 @@ pub(super) fn add_pair_forces(
     let ctx = Ctx {
         p,
         model,
+        compiled: match path {
+            PairPath::LanesEnums | PairPath::OneByOne => None,
+            _ => law_sets::CompiledLaws::of(model),
+        },
         row_start,
         first,
         partner,
@@ -178,6 +187,8 @@ fn pairs_hold_bonds(model: &ContactModel, history: &[f64], stride: usize) -> boo
 struct Ctx<'a> {
     p: &'a Particles,
     model: &'a ContactModel,
+    /// The model's laws as a compiled set, unless it has none or the path takes the enums.
+    compiled: Option<law_sets::CompiledLaws<'a>>,
     row_start: &'a [u32],
     first: &'a [u32],
     partner: &'a [u32],

@@ -69,8 +69,11 @@ pub struct SettlingBedArgs {
 /// `--pair-path`: the kernel's [`PairPath`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum PairPathArg {
-    /// 8 contacts at a time, on the widest vector instructions the CPU has.
+    /// 8 contacts at a time, on the widest vector instructions the CPU has, through the
+    /// model's compiled law set if it has one.
     Lanes,
+    /// As `lanes`, through the slots' enums even for a compiled law set.
+    Enums,
     /// 8 at a time, on AVX2 at most.
     Avx2,
     /// 8 at a time, on SSE2 (every x86-64 CPU).
@@ -83,6 +86,7 @@ impl From<PairPathArg> for PairPath {
     fn from(p: PairPathArg) -> PairPath {
         match p {
             PairPathArg::Lanes => PairPath::Lanes,
+            PairPathArg::Enums => PairPath::LanesEnums,
             PairPathArg::Avx2 => PairPath::LanesAvx2,
             PairPathArg::Baseline => PairPath::LanesBaseline,
             PairPathArg::OneByOne => PairPath::OneByOne,

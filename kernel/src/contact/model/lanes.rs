@@ -1,10 +1,12 @@
 //! The pipeline on [`LANES`] touching contacts at once: [`ContactModel::evaluate_laws`]
 //! written in lanes, step for step, so that every lane gets the scalar pipeline's bits.
 
-use super::{ACTIVE, ContactModel};
+use super::{ACTIVE, ContactModel, HistoryLayout};
+use crate::contact::dispatch::OfAny;
 #[cfg(doc)]
 use crate::contact::lanes::LANES;
 use crate::contact::lanes::{F, M, V};
+use crate::contact::{AnyDamping, AnyExtra, AnyNormal, AnyRolling, AnyTangential};
 use crate::contact::{ContactLanes, DampingLaw, ExtraLaw, NormalLaw, RollingLaw, TangentialLaw};
 
 /// [`super::ContactOut`] per lane.
@@ -31,10 +33,126 @@ impl ContactModel {
         history: &mut [F],
     ) -> Option<ContactOutLanes> {
         let laws = self.pairs[a * self.materials.len() + b].as_ref()?;
-        let l = &self.layout;
+        let typed = TypedLaws {
+            normal: &laws.normal,
+            damping: laws.damping.as_ref(),
+            tangential: laws.tangential.as_ref(),
+            rolling: laws.rolling.as_ref(),
+            extras: &laws.extras[..],
+        };
+        Some(typed.evaluate_lanes(&self.layout, c, history))
+    }
+
+    /// The model's laws with their types named (see [`TypedModel`]): `Some` when every
+    /// material pair's laws are of types N, D, T, R (or leave that slot empty) with at most
+    /// one extra law, of type X. A bond law does not matter: bonds are never evaluated in
+    /// lanes.
+    pub fn typed_laws<N, D, T, R, X>(&self) -> Option<TypedModel<'_, N, D, T, R, X>>
+    where
+        N: OfAny<AnyNormal>,
+        D: OfAny<AnyDamping>,
+        T: OfAny<AnyTangential>,
+        R: OfAny<AnyRolling>,
+        X: OfAny<AnyExtra>,
+    {
+        fn opt<'a, L: OfAny<A>, A>(a: Option<&'a A>) -> Option<Option<&'a L>> {
+            match a {
+                None => Some(None),
+                Some(a) => L::of_any(a).map(Some),
+            }
+        }
+        let mut pairs = Vec::with_capacity(self.pairs.len());
+        for laws in &self.pairs {
+            let Some(laws) = laws else {
+                pairs.push(None);
+                continue;
+            };
+            if laws.extras.len() > 1 {
+                return None;
+            }
+            pairs.push(Some(TypedLaws {
+                normal: N::of_any(&laws.normal)?,
+                damping: opt(laws.damping.as_ref())?,
+                tangential: opt(laws.tangential.as_ref())?,
+                rolling: opt(laws.rolling.as_ref())?,
+                extras: match laws.extras.first() {
+                    None => &[][..],
+                    Some(x) => std::slice::from_ref(X::of_any(x)?),
+                },
+            }));
+        }
+        Some(TypedModel {
+            materials: self.materials.len(),
+            layout: &self.layout,
+            pairs,
+        })
+    }
+}
+
+/// A model's laws with their types named, so that the pipeline in lanes can be compiled
+/// for one law set, as LIGGGHTS compiles a pair style per contact-model combination.
+/// Through the slots' enums, the compiler builds one body that serves every law: each
+/// enum's `match` joins its arms' results in memory, and every value of [`ContactLanes`]
+/// any law might read stays alive. Compiled for named types, the body holds only what
+/// those laws do. Same operations in the same order as [`ContactModel::evaluate_lanes`], so
+/// the same bits (`tests/tests/determinism.rs` checks it on every path).
+pub struct TypedModel<'a, N, D, T, R, X> {
+    materials: usize,
+    layout: &'a HistoryLayout,
+    pairs: Vec<Option<TypedLaws<'a, N, D, T, R, X>>>,
+}
+
+impl<N, D, T, R, X> TypedModel<'_, N, D, T, R, X>
+where
+    N: NormalLaw,
+    D: DampingLaw,
+    T: TangentialLaw,
+    R: RollingLaw,
+    X: ExtraLaw,
+{
+    /// [`ContactModel::evaluate_lanes`], with the same bits.
+    #[inline(always)]
+    pub fn evaluate_lanes(
+        &self,
+        a: usize,
+        b: usize,
+        c: &ContactLanes,
+        history: &mut [F],
+    ) -> Option<ContactOutLanes> {
+        let laws = self.pairs[a * self.materials + b].as_ref()?;
+        Some(laws.evaluate_lanes(self.layout, c, history))
+    }
+}
+
+/// One material pair's laws, typed.
+pub struct TypedLaws<'a, N, D, T, R, X> {
+    normal: &'a N,
+    damping: Option<&'a D>,
+    tangential: Option<&'a T>,
+    rolling: Option<&'a R>,
+    extras: &'a [X],
+}
+
+impl<N, D, T, R, X> TypedLaws<'_, N, D, T, R, X>
+where
+    N: NormalLaw,
+    D: DampingLaw,
+    T: TangentialLaw,
+    R: RollingLaw,
+    X: ExtraLaw,
+{
+    /// The pipeline of `ContactModel::evaluate_laws` in lanes, step for step: the body of
+    /// [`ContactModel::evaluate_lanes`] for these types.
+    #[inline(always)]
+    fn evaluate_lanes(
+        &self,
+        l: &HistoryLayout,
+        c: &ContactLanes,
+        history: &mut [F],
+    ) -> ContactOutLanes {
         history[ACTIVE] = F::splat(1.0);
-        let normal = laws.normal.force_lanes(c, &mut history[l.normal.clone()]);
-        let damp_n = match &laws.damping {
+        let normal = self.normal.force_lanes(c, &mut history[l.normal.clone()]);
+        let damp_n = match self.damping {
             Some(d) => F::select(
                 normal.stiffness.gt(F::ZERO),
                 d.coefficient_lanes(normal.stiffness, c.m_eff) * c.v_n,
@@ -45,9 +163,9 @@ impl ContactModel {
         let coulomb_load = (normal.friction_load + damp_n).abs();
         let mut f_normal = normal.elastic + damp_n;
         let mut tangential = V::ZERO;
-        if let Some(t) = &laws.tangential {
+        if let Some(t) = self.tangential {
             let s_t = t.stiffness_lanes(c, &normal);
-            let eta_t = match &laws.damping {
+            let eta_t = match self.damping {
                 Some(d) => F::select(s_t.gt(F::ZERO), d.coefficient_lanes(s_t, c.m_eff), F::ZERO),
                 None => F::ZERO,
             };
@@ -60,11 +178,11 @@ impl ContactModel {
             );
         }
         let (mut torque_i, mut torque_j) = (V::ZERO, V::ZERO);
-        if let Some(r) = &laws.rolling {
+        if let Some(r) = self.rolling {
             (torque_i, torque_j) =
                 r.torques_lanes(c, &normal, coulomb_load, &mut history[l.rolling.clone()]);
         }
-        for (x, range) in laws.extras.iter().zip(&l.extras) {
+        for (x, range) in self.extras.iter().zip(&l.extras) {
             let h = &mut history[range.clone()];
             f_normal += x.force_lanes(c, h);
             let (ti, tj) = x.torques_lanes(c, &normal, coulomb_load, h);
@@ -75,10 +193,10 @@ impl ContactModel {
         torque_i += (n * c.arm_i).cross(tangential);
         let finite: M = c.arm_j.is_finite();
         torque_j = V::select(finite, torque_j + (n * c.arm_j).cross(tangential), torque_j);
-        Some(ContactOutLanes {
+        ContactOutLanes {
             force: tangential - n * f_normal,
             torque_i,
             torque_j,
-        })
+        }
     }
 }

@@ -5,10 +5,12 @@
 //! end; coincident centres) goes through the scalar pipeline between two batches, so the
 //! sums see every pair in list order and come out with the scalar loop's bits.
 //!
-//! The body is compiled once per instruction set (AVX-512, AVX2, the baseline) and the
-//! CPU's best is picked at run time: the lane loops become vector instructions of the
+//! The body is compiled once per instruction set (AVX-512, AVX2, the baseline), for the
+//! slots' enums and for each compiled law set (`law_sets.rs`), and the CPU's best is
+//! picked at run time: the lane loops become vector instructions of the
 //! width the CPU has. IEEE operations give the same bits on each.
 
+use super::law_sets::LaneLaws;
 use super::{Ctx, PairPath, pair_force};
 use crate::contact::lanes::{F, LANES, V, map};
 use crate::contact::model::ACTIVE;
@@ -88,10 +90,12 @@ fn find_candidates(
 }
 
 impl Ctx<'_> {
-    /// [`Ctx::block`] through the lanes, on the widest vector instructions the CPU has that
-    /// `path` allows.
-    pub(super) fn block_lanes(
+    /// [`Ctx::block`] through the lanes, with `laws` (the model or its compiled law set), on
+    /// the widest vector instructions the CPU has that `path` allows.
+    #[inline(always)]
+    pub(super) fn block_lanes_by<E: LaneLaws>(
         &self,
+        laws: &E,
         path: PairPath,
         block: &Block,
         history: &mut [f64],
@@ -100,48 +104,51 @@ impl Ctx<'_> {
     ) -> usize {
         #[cfg(target_arch = "x86_64")]
         {
-            let avx512 = path == PairPath::Lanes;
-            let avx2 = matches!(path, PairPath::Lanes | PairPath::LanesAvx2);
+            let avx512 = matches!(path, PairPath::Lanes | PairPath::LanesEnums);
+            let avx2 = avx512 || path == PairPath::LanesAvx2;
             if avx512 && std::arch::is_x86_feature_detected!("avx512f") {
                 // SAFETY: the CPU has the features the function is compiled for.
-                return unsafe { self.block_lanes_avx512(block, history, force, torque) };
+                return unsafe { self.block_lanes_avx512(laws, block, history, force, torque) };
             }
             if avx2 && std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: as above.
-                return unsafe { self.block_lanes_avx2(block, history, force, torque) };
+                return unsafe { self.block_lanes_avx2(laws, block, history, force, torque) };
             }
         }
-        self.block_lanes_body(block, history, force, torque)
+        self.block_lanes_body(laws, block, history, force, torque)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,avx")]
-    unsafe fn block_lanes_avx512(
+    unsafe fn block_lanes_avx512<E: LaneLaws>(
         &self,
+        laws: &E,
         block: &Block,
         history: &mut [f64],
         force: &mut [DVec3],
         torque: &mut [DVec3],
     ) -> usize {
-        self.block_lanes_body(block, history, force, torque)
+        self.block_lanes_body(laws, block, history, force, torque)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,avx")]
-    unsafe fn block_lanes_avx2(
+    unsafe fn block_lanes_avx2<E: LaneLaws>(
         &self,
+        laws: &E,
         block: &Block,
         history: &mut [f64],
         force: &mut [DVec3],
         torque: &mut [DVec3],
     ) -> usize {
-        self.block_lanes_body(block, history, force, torque)
+        self.block_lanes_body(laws, block, history, force, torque)
     }
 
     /// Inlined into each instruction set's copy above.
     #[inline(always)]
-    fn block_lanes_body(
+    fn block_lanes_body<E: LaneLaws>(
         &self,
+        laws: &E,
         block: &Block,
         history: &mut [f64],
         force: &mut [DVec3],
@@ -186,6 +193,7 @@ impl Ctx<'_> {
             if touching {
                 if batch.count > 0 && batch.materials != materials {
                     carrying += self.flush(
+                        laws,
                         &mut batch,
                         base,
                         history,
@@ -200,6 +208,7 @@ impl Ctx<'_> {
                 batch.count += 1;
                 if batch.count == LANES {
                     carrying += self.flush(
+                        laws,
                         &mut batch,
                         base,
                         history,
@@ -212,6 +221,7 @@ impl Ctx<'_> {
                 continue;
             }
             carrying += self.flush(
+                laws,
                 &mut batch,
                 base,
                 history,
@@ -230,6 +240,7 @@ impl Ctx<'_> {
             }
         }
         carrying += self.flush(
+            laws,
             &mut batch,
             base,
             history,
@@ -246,8 +257,9 @@ impl Ctx<'_> {
     /// order; empties the batch. Returns the pairs carrying force.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn flush(
+    fn flush<E: LaneLaws>(
         &self,
+        laws: &E,
         batch: &mut Batch,
         base: usize,
         history: &mut [f64],
@@ -314,7 +326,7 @@ impl Ctx<'_> {
         }
         let c = ContactLanes::between_spheres(s, self.dt, count);
         let (a, b) = batch.materials;
-        let Some(out) = self.model.evaluate_lanes(a, b, &c, lanes_history) else {
+        let Some(out) = laws.evaluate(a, b, &c, lanes_history) else {
             return 0;
         };
         let mut carrying = 0;

@@ -70,8 +70,11 @@ pub(super) fn chunk_wall_forces_lanes(
 ) {
     #[cfg(target_arch = "x86_64")]
     {
-        let avx512 = ctx.path == PairPath::Lanes;
-        let avx2 = matches!(ctx.path, PairPath::Lanes | PairPath::LanesAvx2);
+        let avx512 = matches!(ctx.path, PairPath::Lanes | PairPath::LanesEnums);
+        let avx2 = matches!(
+            ctx.path,
+            PairPath::Lanes | PairPath::LanesEnums | PairPath::LanesAvx2
+        );
         if avx512 && std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU has the features the function is compiled for.
             return unsafe { lanes_avx512(ctx, bodies, mine, out, hits) };
