@@ -5,7 +5,7 @@
 //! operations written as loops of fixed length: the compiler turns each loop into one or
 //! two vector instructions (`vsqrtpd`, `vdivpd`, ... on 8 doubles with AVX-512), and the
 //! pair phase is compiled once per instruction set and picks one at run time
-//! (`sim/pair_lanes.rs`).
+//! (`sim/pair_forces/lanes.rs`).
 //!
 //! Every operation is the IEEE operation of the scalar code, lane by lane, in the same
 //! order: a lane form written as its scalar form gives the scalar form's bits (the Rust

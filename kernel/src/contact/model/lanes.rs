@@ -55,7 +55,7 @@ impl ContactModel {
         R: OfAny<AnyRolling>,
         X: OfAny<AnyExtra>,
     {
-        fn opt<'a, L: OfAny<A>, A>(a: Option<&'a A>) -> Option<Option<&'a L>> {
+        fn opt<L: OfAny<A>, A>(a: Option<&A>) -> Option<Option<&L>> {
             match a {
                 None => Some(None),
                 Some(a) => L::of_any(a).map(Some),
