@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use tilth_kernel::contact::contact_lanes::SpheresLanes;
 use tilth_kernel::contact::laws::REGISTRY;
 use tilth_kernel::contact::{
-    Contact, ContactLanes, ContactModel, ContactOut, F, LANES, ModelSpec, Slot,
+    Contact, ContactLanes, ContactModel, ContactOut, F, LANES, LaneLaws, ModelSpec, Slot,
 };
 
 /// Models that together use every registered contact law (the bond law runs in the scalar

@@ -19,7 +19,7 @@
 //! [`ContactModel::build`], never inside the time step.
 //!
 //! The pair phase runs the pipeline on [`LANES`] touching contacts at once
-//! ([`ContactModel::evaluate_lanes`]): each slot's trait has a lane form beside its scalar
+//! ([`LaneLaws::evaluate_lanes`]): each slot's trait has a lane form beside its scalar
 //! one, which must give the scalar form's bits lane by lane, and which by default runs the
 //! scalar form on each lane (see [`lanes`] and `kernel/ADDING_A_LAW.md`); wall contacts too.
 //! Contacts that may end run the scalar pipeline, and so do bonds: once bonds are formed,
@@ -41,7 +41,9 @@ pub use contact_lanes::{ContactLanes, NormalForceLanes, torques_by_lane, with_la
 pub use geometry::Contact;
 pub use lanes::{F, LANES, M, V};
 pub use laws::{AnyBond, AnyDamping, AnyExtra, AnyNormal, AnyRolling, AnyTangential};
-pub use model::{BondStatus, ContactModel, ContactOut, ContactOutLanes, ModelSpec, PairSpec};
+pub use model::{
+    BondStatus, ContactModel, ContactOut, ContactOutLanes, LaneLaws, ModelSpec, PairSpec,
+};
 
 use crate::material::Material;
 use crate::param::{ParamSpec, Params};

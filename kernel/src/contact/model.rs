@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 
 mod lanes;
-pub use lanes::{ContactOutLanes, TypedLaws, TypedModel};
+pub use lanes::{ContactOutLanes, LaneLaws, TypedLaws, TypedModel};
 
 /// Which law fills each slot (names from the registry). `damping`, `tangential` and
 /// `rolling` may be left empty (no damping, frictionless, no rolling resistance).

@@ -1,4 +1,4 @@
-//! The pipeline on [`LANES`] touching contacts at once: [`ContactModel::evaluate_laws`]
+//! The pipeline on [`LANES`] touching contacts at once: `ContactModel::evaluate_laws`
 //! written in lanes, step for step, so that every lane gets the scalar pipeline's bits.
 
 use super::{ACTIVE, ContactModel, HistoryLayout};
@@ -17,15 +17,27 @@ pub struct ContactOutLanes {
     pub torque_j: V,
 }
 
-impl ContactModel {
+/// What evaluates [`LANES`] touching contacts at once: a model through its slots' enums, or
+/// its laws with their types named ([`TypedModel`]), with the same bits.
+pub trait LaneLaws {
     /// Evaluates lanes `0..c.count` of `c`, contacts between materials a and b that all
     /// touch (`overlap > 0`), as [`ContactModel::evaluate`] would one by one; `history[v]`
     /// holds value `v` of each lane's history row. Marks each contact established. `None`
     /// (and the history untouched) when the pair has no laws. Bonds are not evaluated here,
     /// and a row's bond block is left as it is: the simulation runs its pairs one at a time
     /// once bonds are formed, and a wall never bonds.
+    fn evaluate_lanes(
+        &self,
+        a: usize,
+        b: usize,
+        c: &ContactLanes,
+        history: &mut [F],
+    ) -> Option<ContactOutLanes>;
+}
+
+impl LaneLaws for ContactModel {
     #[inline(always)]
-    pub fn evaluate_lanes(
+    fn evaluate_lanes(
         &self,
         a: usize,
         b: usize,
@@ -42,7 +54,9 @@ impl ContactModel {
         };
         Some(typed.evaluate_lanes(&self.layout, c, history))
     }
+}
 
+impl ContactModel {
     /// The model's laws with their types named (see [`TypedModel`]): `Some` when every
     /// material pair's laws are of types N, D, T, R (or leave that slot empty) with at most
     /// one extra law, of type X. A bond law does not matter: bonds are never evaluated in
@@ -94,7 +108,7 @@ impl ContactModel {
 /// Through the slots' enums, the compiler builds one body that serves every law: each
 /// enum's `match` joins its arms' results in memory, and every value of [`ContactLanes`]
 /// any law might read stays alive. Compiled for named types, the body holds only what
-/// those laws do. Same operations in the same order as [`ContactModel::evaluate_lanes`], so
+/// those laws do. Same operations in the same order as the enums' [`LaneLaws::evaluate_lanes`], so
 /// the same bits (`tests/tests/determinism.rs` checks it on every path).
 pub struct TypedModel<'a, N, D, T, R, X> {
     materials: usize,
@@ -102,7 +116,7 @@ pub struct TypedModel<'a, N, D, T, R, X> {
     pairs: Vec<Option<TypedLaws<'a, N, D, T, R, X>>>,
 }
 
-impl<N, D, T, R, X> TypedModel<'_, N, D, T, R, X>
+impl<N, D, T, R, X> LaneLaws for TypedModel<'_, N, D, T, R, X>
 where
     N: NormalLaw,
     D: DampingLaw,
@@ -110,9 +124,8 @@ where
     R: RollingLaw,
     X: ExtraLaw,
 {
-    /// [`ContactModel::evaluate_lanes`], with the same bits.
     #[inline(always)]
-    pub fn evaluate_lanes(
+    fn evaluate_lanes(
         &self,
         a: usize,
         b: usize,
@@ -142,7 +155,7 @@ where
     X: ExtraLaw,
 {
     /// The pipeline of `ContactModel::evaluate_laws` in lanes, step for step: the body of
-    /// [`ContactModel::evaluate_lanes`] for these types.
+    /// [`LaneLaws::evaluate_lanes`] for these types.
     #[inline(always)]
     fn evaluate_lanes(
         &self,

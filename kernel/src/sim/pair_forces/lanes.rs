@@ -1,5 +1,5 @@
 //! The pair phase in lanes: a block's touching pairs gathered [`LANES`] at a time and
-//! evaluated through the laws' lane forms ([`ContactModel::evaluate_lanes`]), each
+//! evaluated through the laws' lane forms ([`LaneLaws::evaluate_lanes`]), each
 //! pair's output then added to the partial sums in list order, as the scalar loop adds it.
 //! A pair the lanes do not take (an established contact that no longer touches, which may
 //! end; coincident centres) goes through the scalar pipeline between two batches, so the
@@ -10,11 +10,10 @@
 //! picked at run time: the lane loops become vector instructions of the
 //! width the CPU has. IEEE operations give the same bits on each.
 
-use super::law_sets::LaneLaws;
 use super::{Ctx, PairPath, pair_force};
 use crate::contact::lanes::{F, LANES, V, map};
 use crate::contact::model::ACTIVE;
-use crate::contact::{ContactLanes, contact_lanes::SpheresLanes};
+use crate::contact::{ContactLanes, LaneLaws, contact_lanes::SpheresLanes};
 use crate::neighbor::schedule::Block;
 use glam::DVec3;
 
@@ -326,7 +325,7 @@ impl Ctx<'_> {
         }
         let c = ContactLanes::between_spheres(s, self.dt, count);
         let (a, b) = batch.materials;
-        let Some(out) = laws.evaluate(a, b, &c, lanes_history) else {
+        let Some(out) = laws.evaluate_lanes(a, b, &c, lanes_history) else {
             return 0;
         };
         let mut carrying = 0;

@@ -3,7 +3,7 @@
 //!
 //! A model whose laws are one of these sets ([`ContactModel::typed_laws`]) runs its touching
 //! pairs through [`TypedModel`]: the lane pipeline compiled for those law types. Any other
-//! model runs them through the slots' enums ([`ContactModel::evaluate_lanes`]), the same
+//! model runs them through the slots' enums (`LaneLaws` for `ContactModel`), the same
 //! pipeline compiled once for every law. Both give the same bits (the same lane forms, in the
 //! same order); a set here only makes it faster: 15-18 % off the settling bed's pair phase
 //! on AVX2 (BENCHMARKS.md, thirty-third sitting). A new law needs no line here; a law set in
@@ -20,57 +20,9 @@ use crate::contact::laws::{
     sjkr::Sjkr,
 };
 use crate::contact::model::TypedModel;
-use crate::contact::{
-    AnyExtra, Contact, ContactLanes, ContactModel, ContactOutLanes, DampingLaw, ExtraLaw, F,
-    NormalLaw, RollingLaw, TangentialLaw,
-};
+use crate::contact::{AnyExtra, Contact, ContactModel, ExtraLaw};
 use crate::neighbor::schedule::Block;
 use glam::DVec3;
-
-/// What evaluates a batch of touching pairs for the pair phase: the model through its
-/// enums, or a compiled law set.
-pub(super) trait LaneLaws {
-    fn evaluate(
-        &self,
-        a: usize,
-        b: usize,
-        c: &ContactLanes,
-        history: &mut [F],
-    ) -> Option<ContactOutLanes>;
-}
-
-impl LaneLaws for ContactModel {
-    #[inline(always)]
-    fn evaluate(
-        &self,
-        a: usize,
-        b: usize,
-        c: &ContactLanes,
-        history: &mut [F],
-    ) -> Option<ContactOutLanes> {
-        self.evaluate_lanes(a, b, c, history)
-    }
-}
-
-impl<N, D, T, R, X> LaneLaws for TypedModel<'_, N, D, T, R, X>
-where
-    N: NormalLaw,
-    D: DampingLaw,
-    T: TangentialLaw,
-    R: RollingLaw,
-    X: ExtraLaw,
-{
-    #[inline(always)]
-    fn evaluate(
-        &self,
-        a: usize,
-        b: usize,
-        c: &ContactLanes,
-        history: &mut [F],
-    ) -> Option<ContactOutLanes> {
-        self.evaluate_lanes(a, b, c, history)
-    }
-}
 
 /// The extra slot of a set without extra laws: no value exists, so a model with an extra
 /// law never matches it.

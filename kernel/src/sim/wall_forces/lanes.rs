@@ -1,7 +1,7 @@
 //! A chunk's wall contacts in lanes: the touching contacts of a chunk's particles with walls
 //! of which they list one feature (every plane, disc, cylinder and cone; a mesh when one
 //! triangle is near), gathered [`LANES`] at a time and
-//! evaluated through the laws' lane forms ([`ContactModel::evaluate_lanes`]). Each wall
+//! evaluated through the laws' lane forms ([`LaneLaws::evaluate_lanes`]). Each wall
 //! shape finds its own closest point, so the geometry is computed one contact at a time and
 //! packed ([`ContactLanes::gather`]); the laws, most of the work, run in lanes. Contacts
 //! that do not touch (which may end) and a mesh's contacts where several triangles are near
@@ -13,9 +13,7 @@
 use super::{
     ChunkBodies, WallCtx, WallOut, WallRows, evaluate_row, group_one_by_one, groups, wall_contact,
 };
-#[cfg(doc)]
-use crate::contact::ContactModel;
-use crate::contact::{Contact, ContactLanes, F, LANES};
+use crate::contact::{Contact, ContactLanes, F, LANES, LaneLaws};
 #[cfg(target_arch = "x86_64")]
 use crate::sim::PairPath;
 use crate::wall::Hit;
