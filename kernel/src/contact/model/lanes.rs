@@ -108,8 +108,9 @@ impl ContactModel {
 /// Through the slots' enums, the compiler builds one body that serves every law: each
 /// enum's `match` joins its arms' results in memory, and every value of [`ContactLanes`]
 /// any law might read stays alive. Compiled for named types, the body holds only what
-/// those laws do. Same operations in the same order as the enums' [`LaneLaws::evaluate_lanes`], so
-/// the same bits (`tests/tests/determinism.rs` checks it on every path).
+/// those laws do. Same operations in the same order as the enums'
+/// [`LaneLaws::evaluate_lanes`], so the same bits (`tests/tests/determinism.rs` checks it on
+/// every path).
 pub struct TypedModel<'a, N, D, T, R, X> {
     materials: usize,
     layout: &'a HistoryLayout,
