@@ -17,10 +17,13 @@ use crate::contact::{ContactLanes, LaneLaws, contact_lanes::SpheresLanes};
 use crate::neighbor::schedule::Block;
 use glam::DVec3;
 
-/// Up to [`LANES`] pairs waiting for evaluation: their list positions and material pair,
-/// and room for their bodies (kept: filled afresh for each batch, not zeroed).
+/// Up to [`LANES`] pairs waiting for evaluation: their particles, the start of their
+/// history rows in the block's, their material pair, and room for their bodies (kept:
+/// filled afresh for each batch, not zeroed).
 struct Batch {
-    k: [usize; LANES],
+    i: [usize; LANES],
+    j: [usize; LANES],
+    at: [usize; LANES],
     count: usize,
     materials: (usize, usize),
     spheres: SpheresLanes,
@@ -171,7 +174,9 @@ impl Ctx<'_> {
         let mut carrying = 0;
         let mut lanes_history = vec![F::ZERO; stride];
         let mut batch = Batch {
-            k: [0; LANES],
+            i: [0; LANES],
+            j: [0; LANES],
+            at: [0; LANES],
             count: 0,
             materials: (0, 0),
             spheres: SpheresLanes::ZERO,
@@ -194,7 +199,6 @@ impl Ctx<'_> {
                     carrying += self.flush(
                         laws,
                         &mut batch,
-                        base,
                         history,
                         &mut lanes_history,
                         force,
@@ -203,13 +207,13 @@ impl Ctx<'_> {
                     );
                 }
                 batch.materials = materials;
-                batch.k[batch.count] = k;
+                (batch.i[batch.count], batch.j[batch.count]) = (i, j);
+                batch.at[batch.count] = at;
                 batch.count += 1;
                 if batch.count == LANES {
                     carrying += self.flush(
                         laws,
                         &mut batch,
-                        base,
                         history,
                         &mut lanes_history,
                         force,
@@ -222,7 +226,6 @@ impl Ctx<'_> {
             carrying += self.flush(
                 laws,
                 &mut batch,
-                base,
                 history,
                 &mut lanes_history,
                 force,
@@ -241,7 +244,6 @@ impl Ctx<'_> {
         carrying += self.flush(
             laws,
             &mut batch,
-            base,
             history,
             &mut lanes_history,
             force,
@@ -260,7 +262,6 @@ impl Ctx<'_> {
         &self,
         laws: &E,
         batch: &mut Batch,
-        base: usize,
         history: &mut [f64],
         lanes_history: &mut [F],
         force: &mut [DVec3],
@@ -280,9 +281,8 @@ impl Ctx<'_> {
         let mut j = [0usize; LANES];
         let mut at = [0usize; LANES];
         for l in 0..LANES {
-            let k = batch.k[if l < count { l } else { 0 }];
-            (i[l], j[l]) = (self.first[k] as usize, self.partner[k] as usize);
-            at[l] = (k - base) * stride;
+            let from = if l < count { l } else { 0 };
+            (i[l], j[l], at[l]) = (batch.i[from], batch.j[from], batch.at[from]);
         }
         let n = p.len();
         assert!(i.iter().chain(&j).all(|&q| q < n));
@@ -329,12 +329,12 @@ impl Ctx<'_> {
             return 0;
         };
         let mut carrying = 0;
+        // Each lane's particles and history row as gathered above.
         for l in 0..count {
-            let k = batch.k[l];
-            let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
-            let at = (k - base) * stride;
+            let (i, j, at) = (i[l], j[l], at[l]);
             for (v, h) in lanes_history.iter().enumerate() {
-                history[at + v] = h.0[l];
+                // SAFETY: `at + v < at + stride <= history.len()`, checked above.
+                unsafe { *history.get_unchecked_mut(at + v) = h.0[l] };
             }
             let f = out.force.lane(l);
             force[i - lo] += f;
