@@ -75,11 +75,10 @@ fn epsd_heap_comes_to_rest() {
     })
     .unwrap();
     // How long the last grain may roll: it lands at most at sqrt(v0^2 + 2 g h) from the
-    // region's top, and on the floor EPSD's full rolling torque mu_r R m g decelerates a
-    // rolling solid sphere at (5/7) mu_r g (torque about the contact point, I + m R^2 =
-    // 7/5 m R^2). With 0.3 m/s, 0.05 m and mu_r 0.15: 1.04 m/s, 1.05 m/s^2, 0.99 s. (Run for
-    // 0.5 s, most pours were at rest, but one grain that reached the ring still rolled at
-    // 5 mm/s.)
+    // region's top, and on the floor EPSD's full rolling torque mu_r R m g decelerates a rolling solid
+    // sphere at (5/7) mu_r g (torque about the contact point, I + m R^2 = 7/5 m R^2). With
+    // 0.3 m/s, 0.05 m and mu_r 0.15: 1.04 m/s, 1.05 m/s^2, 0.99 s. (Run for 0.5 s, most
+    // pours were at rest, but one grain that reached the ring still rolled at 5 mm/s.)
     let g = 9.81;
     let landing = (POUR_SPEED * POUR_SPEED + 2.0 * g * POUR_TOP).sqrt();
     let rolling = landing / (5.0 / 7.0 * ROLLING_FRICTION * g);
