@@ -113,6 +113,52 @@ def pass_odds(rows, draws, rng):
     return ok / draws
 
 
+def test_bar_rows(study):
+    """Per reading, row by row: the data's uncertainty u_i (the injected noise and the scatter of
+    the data's mean, as `synth` writes it) and one run's scatter s_i (the truth's compare)."""
+    truth = json.load(open(os.path.join(study, "5-truth", "compare.json")))
+    out = {}
+    for r in truth["rows"]:
+        out.setdefault(r["observable"], []).append((r["uncertainty"], r["simulated_scatter"]))
+    return out
+
+
+def test_bar_fails(rows, r_judge, draws, rng):
+    """Monte Carlo: the share of draws in which a fit that found the truth misses the CI test's
+    bar, RMSE_fit > BAR x max(noise, RMSE_truth). Row i's data error e_i ~ N(0, u_i^2) is shared
+    by both compares; each compare's R_j-run mean adds its own N(0, s_i^2 / R_j)."""
+    n = len(rows)
+    noise2 = sum(u * u for u, _ in rows) / n
+    bar2 = BAR * BAR
+    fails = 0
+    for _ in range(draws):
+        fit2 = truth2 = 0.0
+        for u, s in rows:
+            e = rng.gauss(0.0, u)
+            m = s / math.sqrt(r_judge)
+            fit2 += (e + rng.gauss(0.0, m)) ** 2
+            truth2 += (e + rng.gauss(0.0, m)) ** 2
+        if fit2 / n > bar2 * max(noise2, truth2 / n):
+            fails += 1
+    return fails / draws
+
+
+def test_bar_table(studies, r_judges, draws, seed):
+    rng = random.Random(seed)
+    print("| study | R_j | " + " | ".join(READINGS) + " | any of the four |")
+    print("|---" * (len(READINGS) + 3) + "|")
+    for r_judge in r_judges:
+        every = 1.0
+        for study in studies:
+            per = test_bar_rows(study)
+            fails = [test_bar_fails(per[o], r_judge, draws, rng) for o in READINGS]
+            passes = math.prod(1.0 - f for f in fails)
+            every *= passes
+            print(f"| {os.path.basename(os.path.normpath(study))} | {r_judge} | "
+                  + " | ".join(f"{f:.4f}" for f in fails) + f" | {1.0 - passes:.3f} |")
+        print(f"| all studies, R_j = {r_judge} | | | | | | {1.0 - every:.3f} |")
+
+
 def study_table(studies, spec, draws, seed):
     rng = random.Random(seed)
     print("| study | " + " | ".join(READINGS) + " | all four |")
@@ -144,10 +190,15 @@ def main(argv):
     ap.add_argument("--draws", type=int, default=20000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--levels", action="store_true")
+    ap.add_argument("--test-bar", type=int, nargs="+", metavar="R_J",
+                    help="the odds that a fit that found the truth misses the CI test's bar, "
+                    "with R_J runs per condition in the judging compares")
     a = ap.parse_args(argv)
     if a.levels:
         levels_table()
-    if a.studies:
+    if a.studies and a.test_bar:
+        test_bar_table(a.studies, a.test_bar, a.draws, a.seed)
+    elif a.studies:
         study_table(a.studies, parse_noise(a.noise or default_noise()), a.draws, a.seed)
     if not a.levels and not a.studies:
         ap.error("give a STUDY or --levels")
