@@ -17,12 +17,6 @@ use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, Setup, Simulation};
 use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric};
 
-/// The pour: its speed (m/s), the top of its region (m), the rolling friction and the count.
-const POUR_SPEED: f64 = 0.3;
-const POUR_TOP: f64 = 0.05;
-const ROLLING_FRICTION: f64 = 0.15;
-const COUNT: usize = 600;
-
 #[test]
 fn epsd_heap_comes_to_rest() {
     let m = model(
@@ -30,22 +24,22 @@ fn epsd_heap_comes_to_rest() {
         &[
             ("restitution", 0.45),
             ("friction", 0.8),
-            ("rolling_friction", ROLLING_FRICTION),
+            ("rolling_friction", 0.15),
         ],
     );
     let factory = Factory::new(FactorySpec {
         region: Region::Cylinder {
             base: DVec3::new(0.0, 0.0, 0.02),
             radius: 0.006,
-            height: POUR_TOP - 0.02,
+            height: 0.03,
         },
         sizes: vec![(1e-3, 1.0)],
         basis: Basis::Number,
         material: 0,
         density: RHO,
         rate: 10_000.0,
-        count: COUNT,
-        velocity: DVec3::new(0.0, 0.0, -POUR_SPEED),
+        count: 600,
+        velocity: DVec3::new(0.0, 0.0, -0.3),
         start_time: 0.0,
         seed: 5,
     })
@@ -74,19 +68,8 @@ fn epsd_heap_comes_to_rest() {
         },
     })
     .unwrap();
-    // How long the last grain may roll: it lands at most at sqrt(v0^2 + 2 g h) from the
-    // region's top, and on the floor EPSD's full rolling torque mu_r R m g decelerates a
-    // rolling solid sphere at (5/7) mu_r g (torque about the contact point, I + m R^2 =
-    // 7/5 m R^2). With 0.3 m/s, 0.05 m and mu_r 0.15: 1.04 m/s, 1.05 m/s^2, 0.99 s. (Run for
-    // 0.5 s, most pours were at rest, but one grain that reached the ring still rolled at
-    // 5 mm/s.)
-    let g = 9.81;
-    let landing = (POUR_SPEED * POUR_SPEED + 2.0 * g * POUR_TOP).sqrt();
-    let rolling = landing / (5.0 / 7.0 * ROLLING_FRICTION * g);
-    let pouring = COUNT as f64 / 10_000.0;
-    let settled = ((pouring + rolling) / 5e-6).ceil() as u64;
-    s.run(settled).unwrap();
-    assert_eq!(s.particles.len(), COUNT);
+    s.run(100_000).unwrap(); // 0.5 s: 0.06 s of pouring, then settling
+    assert_eq!(s.particles.len(), 600);
     let before = s.particles.position.clone();
     let ids = s.particles.id.clone();
     s.run(10_000).unwrap(); // 0.05 s more
