@@ -16,19 +16,12 @@
 //!   mean), or within 1.5x what the truth itself leaves on the same data, with the same
 //!   seeds, where that is more: a draw of the noise that no model can follow (the
 //!   wall-adhesion study's residues at the dry levels, docs/discovery.md, "The stop rule and
-//!   the seeds") is the data's miss, not the loop's. Both compares that judge the fit (the
-//!   fitted model's and the truth's) average R_JUDGE = 24 runs per condition: with the 4 the
-//!   diagnosis and fit use, each compare's mean carries run scatter as large as the data's, the
-//!   fitted model's and the truth's RMSE are two independent draws of it, and a fit that had
-//!   found the truth exactly would miss this bar on about 42 % of the test's runs (three
-//!   effects); with 24, about 2 % (`tools/discovery/criterion_odds.py STUDY... --test-bar 4 24`
-//!   on the studies of two CI runs; docs/discovery.md, "How often a fit that found the truth
-//!   meets the test's bar");
+//!   the seeds") is the data's miss, not the loop's;
 //! - data the model itself made (no hidden effect), 20 seeds: in at least 19 no candidate is
 //!   significant.
 //!
 //! All share one run cache, so the model's own runs (compare, the diagnosis's finite
-//! differences) are made once. About 50 minutes on 2 cores.
+//! differences) are made once. About 45 minutes on 2 cores.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -44,9 +37,6 @@ const HIDDEN: [(&str, f64, u64); 3] = [
 
 /// Draws of the data per hidden effect.
 const DRAWS: u64 = 8;
-
-/// Runs per condition in the compares that judge a fit (before it, after it, and the truth's).
-const R_JUDGE: &str = "24";
 
 /// One study at a time: they share the cache, and each uses both cores.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -80,7 +70,6 @@ fn script(name: &str, args: &[&str]) {
         .env("CACHE", cache())
         // The truth's own compare (OUT/5-truth), the yardstick of a draw no model can follow.
         .env("TRUTH", "1")
-        .env("R_JUDGE", R_JUDGE)
         .current_dir(root())
         .output()
         .unwrap();
