@@ -53,30 +53,8 @@ thread_local! {
 ///
 /// A small function of its own, not inlined into the block: inside the block's body, the
 /// compiler ran short of registers and reloaded the slices from the stack at every pair.
-/// Four pairs at a time on AVX2 ([`find_candidates_avx2`]), with the same outcome.
 #[inline(never)]
 fn find_candidates(
-    first: &[u32],
-    partner: &[u32],
-    position: &[DVec3],
-    radius: &[f64],
-    history: (&[f64], usize),
-    out: &mut [u32],
-) -> usize {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has the features the function is compiled for.
-        return unsafe { find_candidates_avx2(first, partner, position, radius, history, out) };
-    }
-    find_candidates_from(0, 0, first, partner, position, radius, history, out)
-}
-
-/// [`find_candidates`] one pair at a time from pair `k0`, with `n` candidates already written.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn find_candidates_from(
-    k0: usize,
-    mut n: usize,
     first: &[u32],
     partner: &[u32],
     position: &[DVec3],
@@ -86,11 +64,12 @@ fn find_candidates_from(
 ) -> usize {
     let len = first.len();
     assert!(partner.len() == len && out.len() >= len && history.len() >= len * stride);
-    assert!(ACTIVE < stride && n <= k0);
+    assert!(ACTIVE < stride);
     let np = position.len().min(radius.len());
+    let mut n = 0;
     // Without a branch: whether a listed pair interacts is close to a coin toss, which the
     // branch predictor loses.
-    for k in k0..len {
+    for k in 0..len {
         let (i, j) = (first[k] as usize, partner[k] as usize);
         assert!(i.max(j) < np);
         // SAFETY: `i, j < np` (checked above), `n <= k < len <= out.len()` and
@@ -110,101 +89,6 @@ fn find_candidates_from(
         }
     }
     n
-}
-
-/// [`find_candidates`] four pairs at a time: the particles' coordinates and radii loaded
-/// with AVX2 gathers, the same IEEE operations in the same order as
-/// [`find_candidates_from`] (`|d|^2 = (dx dx + dy dy) + dz dz`, no fused multiply-add), and
-/// comparisons that are false on NaN as Rust's are; the pairs past the last four go one at
-/// a time.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx")]
-unsafe fn find_candidates_avx2(
-    first: &[u32],
-    partner: &[u32],
-    position: &[DVec3],
-    radius: &[f64],
-    (history, stride): (&[f64], usize),
-    out: &mut [u32],
-) -> usize {
-    use std::arch::x86_64::*;
-    let len = first.len();
-    assert!(partner.len() == len && out.len() >= len && history.len() >= len * stride);
-    assert!(ACTIVE < stride);
-    let np = position.len().min(radius.len());
-    // The gathers take 32-bit signed indices: 3 per particle into the coordinates.
-    assert!(np <= i32::MAX as usize / 3);
-    let coords: &[f64] = bytemuck::cast_slice(&position[..np]);
-    let last = (np as u32).wrapping_sub(1);
-    let mut n = 0;
-    let mut k = 0;
-    // SAFETY: each group's indices are checked below to be `< np` before any gather reads
-    // with them (`coords` holds 3 np values, `radius` at least np); `k + 3 < len`, so the
-    // index loads read inside `first` and `partner`, the history reads `k' * stride +
-    // ACTIVE < len * stride <= history.len()`, and the writes `out[n]` have `n <= k' < len`.
-    unsafe {
-        let surely_factor = _mm256_set1_pd(SURELY_TOUCHING);
-        let zero = _mm256_setzero_pd();
-        while k + 4 <= len {
-            let fi = _mm_loadu_si128(first.as_ptr().add(k) as *const __m128i);
-            let pj = _mm_loadu_si128(partner.as_ptr().add(k) as *const __m128i);
-            // Unsigned `max(i, j) <= np - 1` in every lane (np >= 1 when len > 0 holds an
-            // index: np = 0 makes `last` u32::MAX, and the check below then fails on any).
-            let top = _mm_set1_epi32(last as i32);
-            let within = _mm_cmpeq_epi32(_mm_max_epu32(_mm_max_epu32(fi, pj), top), top);
-            assert!(np > 0 && _mm_movemask_epi8(within) == 0xffff);
-            let fi3 = _mm_add_epi32(fi, _mm_add_epi32(fi, fi));
-            let pj3 = _mm_add_epi32(pj, _mm_add_epi32(pj, pj));
-            let c = coords.as_ptr();
-            let dx = _mm256_sub_pd(
-                _mm256_i32gather_pd::<8>(c, pj3),
-                _mm256_i32gather_pd::<8>(c, fi3),
-            );
-            let dy = _mm256_sub_pd(
-                _mm256_i32gather_pd::<8>(c.add(1), pj3),
-                _mm256_i32gather_pd::<8>(c.add(1), fi3),
-            );
-            let dz = _mm256_sub_pd(
-                _mm256_i32gather_pd::<8>(c.add(2), pj3),
-                _mm256_i32gather_pd::<8>(c.add(2), fi3),
-            );
-            let rsum = _mm256_add_pd(
-                _mm256_i32gather_pd::<8>(radius.as_ptr(), fi),
-                _mm256_i32gather_pd::<8>(radius.as_ptr(), pj),
-            );
-            let dist2 = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
-                _mm256_mul_pd(dz, dz),
-            );
-            let rr = _mm256_mul_pd(rsum, rsum);
-            let h = history.as_ptr().add(k * stride + ACTIVE);
-            let active = _mm256_set_pd(*h.add(3 * stride), *h.add(2 * stride), *h.add(stride), *h);
-            let skip = _mm256_and_pd(
-                _mm256_cmp_pd::<_CMP_EQ_OQ>(active, zero),
-                _mm256_cmp_pd::<_CMP_GE_OQ>(dist2, rr),
-            );
-            let surely = _mm256_and_pd(
-                _mm256_cmp_pd::<_CMP_GT_OQ>(dist2, zero),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(dist2, _mm256_mul_pd(rr, surely_factor)),
-            );
-            let (skip, surely) = (_mm256_movemask_pd(skip), _mm256_movemask_pd(surely));
-            for l in 0..4 {
-                *out.get_unchecked_mut(n) = (k + l) as u32 | ((surely >> l) as u32 & 1) << 31;
-                n += ((skip >> l) & 1 ^ 1) as usize;
-            }
-            k += 4;
-        }
-    }
-    find_candidates_from(
-        k,
-        n,
-        first,
-        partner,
-        position,
-        radius,
-        (history, stride),
-        out,
-    )
 }
 
 impl Ctx<'_> {
@@ -472,67 +356,6 @@ impl Ctx<'_> {
 mod tests {
     use super::SURELY_TOUCHING;
     use rand::{Rng, SeedableRng};
-
-    /// The AVX2 candidate pass writes what the pair-at-a-time one writes, on random pairs
-    /// of particles near touching, with NaN positions, zero distances and established
-    /// contacts among them, for every length's last partial group of four.
-    #[test]
-    fn the_candidate_pass_in_fours_finds_what_the_scalar_one_finds() {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            use glam::DVec3;
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-            let np = 200;
-            let mut position: Vec<DVec3> = (0..np)
-                .map(|_| DVec3::new(rng.random(), rng.random(), rng.random()) * 0.01)
-                .collect();
-            position[7] = DVec3::new(f64::NAN, 0.0, 0.0);
-            position[9] = position[8];
-            let radius: Vec<f64> = (0..np).map(|_| rng.random_range(0.001..0.004)).collect();
-            for len in [0, 1, 3, 4, 5, 8, 1001, 1003] {
-                let stride = 4;
-                let first: Vec<u32> = (0..len).map(|k| (k / 3) as u32 % np as u32).collect();
-                let mut partner: Vec<u32> =
-                    (0..len).map(|_| rng.random_range(0..np as u32)).collect();
-                // A NaN partner (particle 7) and a coincident pair (8 and 9: pair 24's
-                // first member is 24 / 3 = 8).
-                if len > 30 {
-                    (partner[2], partner[24]) = (7, 9);
-                }
-                let history: Vec<f64> = (0..len * stride)
-                    .map(|_| if rng.random_bool(0.3) { 1.0 } else { 0.0 })
-                    .collect();
-                let mut a = vec![0; len];
-                let mut b = vec![0; len];
-                let na = super::find_candidates_from(
-                    0,
-                    0,
-                    &first,
-                    &partner,
-                    &position,
-                    &radius,
-                    (&history, stride),
-                    &mut a,
-                );
-                // SAFETY: the CPU has AVX2 (checked above).
-                let nb = unsafe {
-                    super::find_candidates_avx2(
-                        &first,
-                        &partner,
-                        &position,
-                        &radius,
-                        (&history, stride),
-                        &mut b,
-                    )
-                };
-                assert_eq!((na, &a[..na]), (nb, &b[..nb]), "{len} pairs");
-                if len > 100 {
-                    let surely = a[..na].iter().filter(|&&c| c >> 31 != 0).count();
-                    assert!(na < len && surely > 0 && surely < na, "{na} {surely}");
-                }
-            }
-        }
-    }
 
     /// Just below the threshold, for radii spread over six decades (and so over the
     /// doubles' mantissas), the exact test agrees: `r - sqrt(d2) > 0`.
