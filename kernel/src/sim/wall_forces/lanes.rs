@@ -145,15 +145,16 @@ fn lanes_body(
             };
             let b = batch.get_or_insert_with(|| WallBatch::new(ctx.stride));
             let materials = (body.material, wall.material as usize);
-            // A full batch waits for the next contact, so that `flush` (inlined with the
-            // laws) has two call sites, not three.
-            if b.count == LANES || (b.count > 0 && b.materials != materials) {
+            if b.count > 0 && b.materials != materials {
                 flush(ctx, b, mine, out);
             }
             b.materials = materials;
             let at = lq * ctx.stride;
             let point = h.point + wall.offset;
             b.push(lq, point, &contact, &mine.history[at..at + ctx.stride]);
+            if b.count == LANES {
+                flush(ctx, b, mine, out);
+            }
         }
     }
     if let Some(b) = &mut batch {
