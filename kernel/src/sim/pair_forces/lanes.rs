@@ -181,82 +181,77 @@ impl Ctx<'_> {
             materials: (0, 0),
             spheres: SpheresLanes::ZERO,
         };
-        // One call of `flush`, which is inlined with the laws: at three call sites the body
-        // held three copies of the law pipeline. A full batch is flushed when the next
-        // candidate arrives (or at the end) rather than at once; nothing touches the sums
-        // or the history rows in between, so the order of the adds is unchanged.
-        for at_c in 0..=n {
-            let next = candidates[..n].get(at_c).map(|&c| {
-                let kk = (c & !(1 << 31)) as usize;
-                let k = base + kk;
-                let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
-                let touching = c >> 31 != 0 || {
-                    let d = p.position[j] - p.position[i];
-                    let dist = d.length_squared().sqrt();
-                    // As `Contact` computes it.
-                    let overlap = p.radius[i] + p.radius[j] - dist;
-                    overlap > 0.0 && dist != 0.0
-                };
-                let materials = (p.material[i] as usize, p.material[j] as usize);
-                (i, j, kk * stride, touching, materials)
-            });
-            let flush_now = batch.count > 0
-                && match next {
-                    None => true,
-                    Some((_, _, _, touching, materials)) => {
-                        !touching || batch.count == LANES || batch.materials != materials
-                    }
-                };
-            if flush_now {
-                carrying += self.flush(
-                    laws,
-                    &mut batch,
-                    history,
-                    &mut lanes_history,
-                    force,
-                    torque,
-                    lo,
-                );
-            }
-            let Some((i, j, at, touching, materials)) = next else {
-                break;
+        for &c in &candidates[..n] {
+            let kk = (c & !(1 << 31)) as usize;
+            let k = base + kk;
+            let (i, j) = (self.first[k] as usize, self.partner[k] as usize);
+            let at = kk * stride;
+            let touching = c >> 31 != 0 || {
+                let d = p.position[j] - p.position[i];
+                let dist = d.length_squared().sqrt();
+                // As `Contact` computes it.
+                let overlap = p.radius[i] + p.radius[j] - dist;
+                overlap > 0.0 && dist != 0.0
             };
+            let materials = (p.material[i] as usize, p.material[j] as usize);
             if touching {
+                if batch.count > 0 && batch.materials != materials {
+                    carrying += self.flush(
+                        laws,
+                        &mut batch,
+                        history,
+                        &mut lanes_history,
+                        force,
+                        torque,
+                        lo,
+                    );
+                }
                 batch.materials = materials;
                 (batch.i[batch.count], batch.j[batch.count]) = (i, j);
                 batch.at[batch.count] = at;
                 batch.count += 1;
-            } else {
-                carrying +=
-                    self.scalar_pair(i, j, &mut history[at..at + stride], force, torque, lo);
+                if batch.count == LANES {
+                    carrying += self.flush(
+                        laws,
+                        &mut batch,
+                        history,
+                        &mut lanes_history,
+                        force,
+                        torque,
+                        lo,
+                    );
+                }
+                continue;
+            }
+            carrying += self.flush(
+                laws,
+                &mut batch,
+                history,
+                &mut lanes_history,
+                force,
+                torque,
+                lo,
+            );
+            let h = &mut history[at..at + stride];
+            if let Some(o) = pair_force(p, self.model, i, j, h, self.dt, self.time) {
+                force[i - lo] += o.force;
+                torque[i - lo] += o.torque_i;
+                force[j - lo] -= o.force;
+                torque[j - lo] += o.torque_j;
+                carrying += (o.force != DVec3::ZERO) as usize;
             }
         }
+        carrying += self.flush(
+            laws,
+            &mut batch,
+            history,
+            &mut lanes_history,
+            force,
+            torque,
+            lo,
+        );
         CANDIDATES.set(candidates);
         carrying
-    }
-
-    /// A listed pair the lanes do not take, through the scalar pipeline; returns 1 when it
-    /// carries force. Out of line: rare, and inlined it put a copy of every law's scalar
-    /// form into the lane body.
-    #[inline(never)]
-    #[cold]
-    fn scalar_pair(
-        &self,
-        i: usize,
-        j: usize,
-        h: &mut [f64],
-        force: &mut [DVec3],
-        torque: &mut [DVec3],
-        lo: usize,
-    ) -> usize {
-        let Some(o) = pair_force(self.p, self.model, i, j, h, self.dt, self.time) else {
-            return 0;
-        };
-        force[i - lo] += o.force;
-        torque[i - lo] += o.torque_i;
-        force[j - lo] -= o.force;
-        torque[j - lo] += o.torque_j;
-        (o.force != DVec3::ZERO) as usize
     }
 
     /// Evaluates the batch's pairs and adds their outputs to the partial sums in list
