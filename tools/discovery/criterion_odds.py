@@ -4,6 +4,12 @@ with its own synthetic data, has every reading's RMSE within 1.5x the injected n
 
     python3 tools/discovery/criterion_odds.py STUDY [STUDY ...] [--noise SPEC] [--draws N]
     python3 tools/discovery/criterion_odds.py --levels
+    python3 tools/discovery/criterion_odds.py STUDY [STUDY ...] --test-bar R_J [R_J ...]
+
+`--test-bar` gives instead the odds that a fit that found the truth misses the CI test's own
+bar (1.5x the larger of the data's noise and the truth's own RMSE) with R_J runs per condition
+in the judging compares (docs/discovery.md, "How often a fit that found the truth meets the
+test's bar").
 
 STUDY is a hidden-effect study's OUT run with TRUTH=1 (tools/discovery/hidden_effect.sh): its
 `data.csv` and its truth's compare `5-truth/compare.json`. NOISE is the injected noise the data
