@@ -149,6 +149,54 @@ def test_bar_fails(rows, r_judge, draws, rng):
     return fails / draws
 
 
+def chi2_rows(study, spec):
+    """Per row of a study: the injected sd sigma_i, one run's scatter s_i (the truth's compare)
+    and the replicates R_d behind the data's mean."""
+    with open(os.path.join(study, "data.csv")) as f:
+        data = {(r["observable"], float(r["moisture_pct"])): r for r in csv.DictReader(f)}
+    truth = json.load(open(os.path.join(study, "5-truth", "compare.json")))
+    out = []
+    for r in truth["rows"]:
+        d = data[(r["observable"], float(r["conditions"]["moisture_pct"]))]
+        out.append((injected(spec, r["observable"], float(d["value"])), r["simulated_scatter"],
+                    int(d["replicates"])))
+    return out
+
+
+def chi2_test_fails(rows, r_judge, alpha, draws, rng):
+    """Monte Carlo: the share of draws in which a fit that found the truth fails the CI test's
+    consistency check, P(chi^2_n > X) < alpha with X = sum z_i^2 over the study's n rows, as
+    `tilth compare` computes it: z_i = (mean of R_j runs - value) / sqrt(u_i^2 + s'_i^2 / R_j).
+    The value is the mean of R_d truth runs plus N(0, sigma_i^2); its uncertainty u_i^2 =
+    sigma_i^2 + s''_i^2 / R_d. Both scatters s'_i, s''_i are sample sds of their runs
+    (s_i^2 chi^2_{R-1} / (R - 1)), which gives X a heavier tail than chi^2_n."""
+    n = len(rows)
+    fails = 0
+    for _ in range(draws):
+        x = 0.0
+        for sigma, s, r_data in rows:
+            e = rng.gauss(0.0, sigma) + rng.gauss(0.0, s / math.sqrt(r_data))
+            u2 = sigma * sigma + s * s * rng.gammavariate((r_data - 1) / 2, 2) / (r_data - 1) / r_data
+            m = rng.gauss(0.0, s / math.sqrt(r_judge))
+            sj2 = s * s * rng.gammavariate((r_judge - 1) / 2, 2) / (r_judge - 1)
+            x += (m - e) ** 2 / (u2 + sj2 / r_judge)
+        if chi2_survival(x, n) < alpha:
+            fails += 1
+    return fails / draws
+
+
+def chi2_test_table(studies, spec, r_judges, alpha, draws, seed):
+    rng = random.Random(seed)
+    print(f"| R_j | " + " | ".join(os.path.basename(os.path.normpath(s)) for s in studies)
+          + " | any study |")
+    print("|---" * (len(studies) + 2) + "|")
+    for r_judge in r_judges:
+        fails = [chi2_test_fails(chi2_rows(s, spec), r_judge, alpha, draws, rng) for s in studies]
+        print(f"| {r_judge} | " + " | ".join(f"{f:.4f}" for f in fails)
+              + f" | {1.0 - math.prod(1.0 - f for f in fails):.4f} |")
+    print(f"\n(alpha = {alpha}; known scatters instead of sampled ones: chi^2_n's own alpha)")
+
+
 def test_bar_table(studies, r_judges, draws, seed):
     rng = random.Random(seed)
     print("| study | R_j | " + " | ".join(READINGS) + " | any of the four |")
@@ -199,10 +247,17 @@ def main(argv):
     ap.add_argument("--test-bar", type=int, nargs="+", metavar="R_J",
                     help="the odds that a fit that found the truth misses the CI test's bar, "
                     "with R_J runs per condition in the judging compares")
+    ap.add_argument("--chi2-test", type=int, nargs="+", metavar="R_J",
+                    help="the odds that a fit that found the truth fails the CI test's chi^2 "
+                    "consistency check at --alpha, with R_J runs per condition in its compare")
+    ap.add_argument("--alpha", type=float, default=0.001)
     a = ap.parse_args(argv)
     if a.levels:
         levels_table()
-    if a.studies and a.test_bar:
+    if a.studies and a.chi2_test:
+        chi2_test_table(a.studies, parse_noise(a.noise or default_noise()), a.chi2_test, a.alpha,
+                        a.draws, a.seed)
+    elif a.studies and a.test_bar:
         test_bar_table(a.studies, a.test_bar, a.draws, a.seed)
     elif a.studies:
         study_table(a.studies, parse_noise(a.noise or default_noise()), a.draws, a.seed)
