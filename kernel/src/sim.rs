@@ -8,10 +8,9 @@
 //! 3. rebuild the pair list and wall contact list when something moved more than skin/2
 //!    (history is carried over);
 //! 4. pair phase: every listed pair's force and torques (contact laws, then the bond if
-//!    intact), added to both particles' partial sums in its block of the pair list
-//!    ([`PairSchedule`]);
-//! 5. particle phase: each particle adds gravity, its share of the blocks' partial sums (in
-//!    block order) and its wall contacts;
+//!    intact), added to both particles' force sums, which start from gravity's, block by
+//!    block of the pair list and phase by phase ([`PairSchedule`]);
+//! 5. particle phase: each particle adds its wall contacts;
 //! 6. second half kick, applied in the particle phase as each force is known, with the
 //!    failure checks (non-finite state, runaway speed, escape); within [`Simulation::run`],
 //!    also the next step's step 1 for each chunk that passed them, while its particles are
@@ -39,10 +38,10 @@ use crate::wall::{Hit, Wall};
 use drift::{ChunkMotion, ChunkResult, Drift, kick_and_drift};
 use glam::DVec3;
 pub use pair_forces::PairPath;
-use pair_forces::{PartialSums, SumRows, add_pair_forces};
+use pair_forces::add_pair_forces;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
-use sum_and_kick::{ChunkSums, ChunkWalls, sum_and_kick};
+use sum_and_kick::{ChunkSums, ChunkWalls, start_sums, sum_and_kick};
 use team::{Team, map_items};
 use wall_forces::{ChunkBodies, WallCtx, WallList, WallOut, WallRows, chunk_wall_forces};
 
@@ -60,8 +59,8 @@ thread_local! {
 }
 
 /// One particle-phase task's rows: force, torque, velocity, spin, position, wall contacts,
-/// and the blocks' partial sums of its particles.
-type ChunkRows<'a, 's> = (
+/// and the next pair phase's force and torque sums.
+type ChunkRows<'a> = (
     (
         (
             (
@@ -72,7 +71,7 @@ type ChunkRows<'a, 's> = (
         ),
         WallRows<'a>,
     ),
-    &'s mut [SumRows<'a>],
+    (&'a mut [DVec3], &'a mut [DVec3]),
 );
 
 /// Steps between spatial reorderings of the particles (cell order, for cache locality; as
@@ -143,7 +142,16 @@ pub struct Simulation {
     pairs: PairList,
     /// How the pair phase splits its sums, made from `pairs` at each rebuild.
     schedule: PairSchedule,
-    pair_sums: PartialSums,
+    /// The force and torque sums the next pair phase adds to, one row per particle, and
+    /// the gravity they start from (`m g` and zero; see [`sum_and_kick::start_sums`]), or
+    /// `None` when they are not ready (new particles, a new order). The pair phase adds to
+    /// these, then they change places with `particles.force` and `torque`: the particle
+    /// phase reads the complete sums there and readies the old rows here for the next step,
+    /// in the same pass (it once summed each block's partial sums, twice the rows:
+    /// BENCHMARKS.md, thirty-fifth sitting).
+    next_force: Vec<DVec3>,
+    next_torque: Vec<DVec3>,
+    next_ready: Option<DVec3>,
     /// Listed pairs that carried force in the last evaluation.
     pairs_carrying: usize,
     /// How the pair phase evaluates touching contacts.
@@ -354,7 +362,9 @@ impl Simulation {
             extra,
             pairs: PairList::empty(stride),
             schedule: PairSchedule::default(),
-            pair_sums: PartialSums::default(),
+            next_force: vec![],
+            next_torque: vec![],
+            next_ready: None,
             pairs_carrying: 0,
             pair_path: PairPath::default(),
             walls_near: WallContacts::empty(),
@@ -685,11 +695,16 @@ impl Simulation {
         let mut laps = Laps::start();
         let dt = self.dt;
         let pool = self.pool.clone();
+        self.ready_next_sums();
         self.pairs_carrying = pool.install(|| self.pair_phase(team));
+        // This step's sums are complete; the old rows become the next step's.
+        std::mem::swap(&mut self.particles.force, &mut self.next_force);
+        std::mem::swap(&mut self.particles.torque, &mut self.next_torque);
+        self.next_ready = None;
         self.times.pair += laps.lap();
 
-        // Particle phase: each particle's sum (gravity, its share of each block's partial
-        // sums in block order, its walls), then the second half kick and the checks.
+        // Particle phase: each particle's sum (gravity and its pairs', then its walls), the
+        // second half kick and the checks; and the next step's sums readied.
         let gravity = self.gravity;
         let model = &self.model;
         let stride = self.pairs.stride;
@@ -752,7 +767,7 @@ impl Simulation {
         let ref_position = &self.ref_position;
         // One chunk of particles: rows c * CHUNK.. of each array, and their wall rows.
         let chunk = |c: usize,
-                     ((((((fs, ts), vs), ws), xs), mut mine), block_sums): ChunkRows|
+                     ((((((fs, ts), vs), ws), xs), mut mine), (next_f, next_t)): ChunkRows|
          -> ChunkResult {
             // The chunk's wall contacts first, so that the touching ones with a wall of
             // one listed feature can be evaluated in lanes; each particle adds its own in
@@ -781,16 +796,16 @@ impl Simulation {
             // Whether every kicked particle of the chunk passed the cheap test.
             let plausible_all = sum_and_kick(
                 ChunkSums {
-                    first: c * CHUNK,
                     f: fs,
                     t: ts,
                     v: vs,
                     w: ws,
                     mass: &mass[rows.clone()],
                     kick: kick.then(|| &kick_factor[rows.clone()]),
+                    next_f,
+                    next_t,
                 },
                 gravity,
-                block_sums,
                 ChunkWalls {
                     outs: &outs,
                     start: &wstart[rows.start..rows.end + 1],
@@ -828,14 +843,10 @@ impl Simulation {
             });
             ChunkResult::Checked(failed)
         };
-        let (mut sum_rows, bounds) = self.pair_sums.by_chunk(&self.schedule, n, CHUNK);
-        let mut block_sums = Vec::with_capacity(bounds.len());
-        let mut rest = &mut sum_rows[..];
-        for w in bounds.windows(2) {
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(w[1] - w[0]);
-            block_sums.push(mine);
-            rest = tail;
-        }
+        let next_rows = self
+            .next_force
+            .chunks_mut(CHUNK)
+            .zip(self.next_torque.chunks_mut(CHUNK));
         let items: Vec<ChunkRows> = p
             .force
             .chunks_mut(CHUNK)
@@ -844,9 +855,10 @@ impl Simulation {
             .zip(p.angular_velocity.chunks_mut(CHUNK))
             .zip(p.position.chunks_mut(CHUNK))
             .zip(wall_chunks)
-            .zip(block_sums)
+            .zip(next_rows)
             .collect();
         let results: Vec<ChunkResult> = self.pool.install(|| map_items(team, items, chunk));
+        self.next_ready = Some(gravity);
         let failure = results.iter().find_map(|r| match r {
             ChunkResult::Checked(f) => *f,
             ChunkResult::Passed(_) => None,
@@ -956,9 +968,10 @@ impl Simulation {
                 let t = std::time::Instant::now();
                 std::hint::black_box(self.pair_phase(None));
                 seconds += t.elapsed().as_secs_f64();
-                // As the particle phase leaves them (untimed: it takes them as it reads them).
-                self.pair_sums.force.fill(DVec3::ZERO);
-                self.pair_sums.torque.fill(DVec3::ZERO);
+                // As the particle phase leaves them (untimed: it readies them as it reads
+                // this step's).
+                self.next_ready = None;
+                self.ready_next_sums();
             }
             seconds
         });
@@ -966,8 +979,28 @@ impl Simulation {
         seconds
     }
 
+    /// Sets the sums the next pair phase adds to (`m g` and zero), unless the particle phase
+    /// readied them for these particles and this gravity.
+    fn ready_next_sums(&mut self) {
+        let p = &self.particles;
+        let ready = self.next_ready.map(|g| g.to_array().map(f64::to_bits))
+            == Some(self.gravity.to_array().map(f64::to_bits));
+        if ready && self.next_force.len() == p.len() {
+            return;
+        }
+        self.next_force.resize(p.len(), DVec3::ZERO);
+        self.next_torque.resize(p.len(), DVec3::ZERO);
+        start_sums(
+            &mut self.next_force,
+            &mut self.next_torque,
+            &p.mass,
+            self.gravity,
+        );
+        self.next_ready = Some(self.gravity);
+    }
+
     /// The pair phase on this step's state (inside the pool, or on `team`): every listed
-    /// pair's forces into the blocks' partial sums. Returns the pairs carrying force.
+    /// pair's forces added to the next sums (readied). Returns the pairs carrying force.
     fn pair_phase(&mut self, team: Option<&Team>) -> usize {
         let (p, model, pairs, schedule) = (
             &self.particles,
@@ -975,7 +1008,7 @@ impl Simulation {
             &mut self.pairs,
             &self.schedule,
         );
-        let sums = &mut self.pair_sums;
+        let sums = (&mut self.next_force[..], &mut self.next_torque[..]);
         let times = (self.dt, self.time);
         // Bonds are evaluated one at a time: once bonds are formed, a model runs its whole
         // pair phase so. Before (a bonded sample's filling and compaction; a model whose bond
@@ -1117,6 +1150,8 @@ impl Simulation {
     /// omega += T (dt/2 / I). In place, so it allocates nothing once the count of particles
     /// stops growing.
     fn refresh_kick_factor(&mut self) {
+        // The masses may have a new order: the next sums start from them.
+        self.next_ready = None;
         let (p, dt) = (&self.particles, self.dt);
         self.kick_factor.clear();
         self.kick_factor.extend(
@@ -1166,7 +1201,7 @@ impl Simulation {
             + self.pairs.heap_bytes()
             + self.ref_position.capacity() * 24
             + self.kick_factor.capacity() * 16
-            + (self.pair_sums.force.capacity() + self.pair_sums.torque.capacity()) * 24
+            + (self.next_force.capacity() + self.next_torque.capacity()) * 24
             + self.walls_near.heap_bytes()
             + self.wall_shares.capacity() * 48
             // A B-tree entry (two ids and a time) with its share of the node, roughly.

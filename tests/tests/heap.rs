@@ -17,6 +17,12 @@ use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, Setup, Simulation};
 use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric};
 
+/// The pour: its speed (m/s), the top of its region (m), the rolling friction and the count.
+const POUR_SPEED: f64 = 0.3;
+const POUR_TOP: f64 = 0.05;
+const ROLLING_FRICTION: f64 = 0.15;
+const COUNT: usize = 600;
+
 #[test]
 fn epsd_heap_comes_to_rest() {
     let m = model(
@@ -24,22 +30,22 @@ fn epsd_heap_comes_to_rest() {
         &[
             ("restitution", 0.45),
             ("friction", 0.8),
-            ("rolling_friction", 0.15),
+            ("rolling_friction", ROLLING_FRICTION),
         ],
     );
     let factory = Factory::new(FactorySpec {
         region: Region::Cylinder {
             base: DVec3::new(0.0, 0.0, 0.02),
             radius: 0.006,
-            height: 0.03,
+            height: POUR_TOP - 0.02,
         },
         sizes: vec![(1e-3, 1.0)],
         basis: Basis::Number,
         material: 0,
         density: RHO,
         rate: 10_000.0,
-        count: 600,
-        velocity: DVec3::new(0.0, 0.0, -0.3),
+        count: COUNT,
+        velocity: DVec3::new(0.0, 0.0, -POUR_SPEED),
         start_time: 0.0,
         seed: 5,
     })
@@ -68,8 +74,19 @@ fn epsd_heap_comes_to_rest() {
         },
     })
     .unwrap();
-    s.run(100_000).unwrap(); // 0.5 s: 0.06 s of pouring, then settling
-    assert_eq!(s.particles.len(), 600);
+    // How long the last grain may roll: it lands at most at sqrt(v0^2 + 2 g h) from the
+    // region's top, and on the floor EPSD's full rolling torque mu_r R m g decelerates a
+    // rolling solid sphere at (5/7) mu_r g (torque about the contact point, I + m R^2 =
+    // 7/5 m R^2). With 0.3 m/s, 0.05 m and mu_r 0.15: 1.04 m/s, 1.05 m/s^2, 0.99 s. (Run for
+    // 0.5 s, most pours were at rest, but one grain that reached the ring still rolled at
+    // 5 mm/s.)
+    let g = 9.81;
+    let landing = (POUR_SPEED * POUR_SPEED + 2.0 * g * POUR_TOP).sqrt();
+    let rolling = landing / (5.0 / 7.0 * ROLLING_FRICTION * g);
+    let pouring = COUNT as f64 / 10_000.0;
+    let settled = ((pouring + rolling) / 5e-6).ceil() as u64;
+    s.run(settled).unwrap();
+    assert_eq!(s.particles.len(), COUNT);
     let before = s.particles.position.clone();
     let ids = s.particles.id.clone();
     s.run(10_000).unwrap(); // 0.05 s more

@@ -9,8 +9,8 @@ pub struct CellGrid {
     /// The axes from the fastest-varying in the cells' linear order to the slowest. A
     /// particle's neighbours lie within one layer of cells across the slowest axis, so in
     /// cell order they are up to about one layer's particles away in index. That distance
-    /// sets how far each pair-phase block reaches beyond its own rows, and so how many
-    /// partial sums a particle has (`PairSchedule`). So the slowest axis is the one whose
+    /// sets how far each pair-phase block reaches beyond its own rows, and so how many rows
+    /// a block needs to keep its neighbours apart (`PairSchedule`). So the slowest axis is the one whose
     /// layers hold the fewest points, as each point sees its own (see `axis_order`), and
     /// the fastest the one of fewer cells of the other two. A settled bed 60 x 60 mm wide
     /// and 40 mm deep, in cells of 2.5 mm: layers across x of 24 x 16 cells, where layers

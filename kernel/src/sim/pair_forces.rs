@@ -1,10 +1,9 @@
 //! The pair phase: every listed pair's force and torques through the contact laws, added to
-//! both particles' partial sums as they are computed, block by block of the
-//! [`PairSchedule`] (see there why the sums come out the same on any number of threads).
+//! both particles' force sums as they are computed, block by block and phase by phase of
+//! the [`PairSchedule`] (see there why the sums come out the same on any number of threads).
 
 use super::team::{Team, map_items};
 use crate::contact::{Contact, ContactModel, ContactOut};
-use crate::neighbor::pairs::resized;
 use crate::neighbor::schedule::Block;
 use crate::neighbor::{PairList, PairSchedule};
 use crate::particles::Particles;
@@ -32,84 +31,16 @@ pub enum PairPath {
     OneByOne,
 }
 
-/// Each block's partial sums of force and torque (see [`PairSchedule`]). Zero between
-/// steps: the particle phase zeroes each sum as it adds it ([`PartialSums::by_chunk`]), so
-/// the pair phase adds to them without zeroing them first (a pass over 96 bytes per
-/// particle that took 4-5 % of a settling-bed run; BENCHMARKS.md, twenty-third sitting).
-#[derive(Debug, Default)]
-pub(super) struct PartialSums {
-    pub force: Vec<DVec3>,
-    pub torque: Vec<DVec3>,
-}
-
-/// The partial sums of one block for particles `start..start + force.len()`, lent to the
-/// particle-phase chunk holding those particles.
-pub(super) struct SumRows<'a> {
-    pub start: usize,
-    pub force: &'a mut [DVec3],
-    pub torque: &'a mut [DVec3],
-}
-
-impl PartialSums {
-    /// The sums cut for chunks of `chunk` particles out of `n`: every block's rows for
-    /// chunk c, in block order, are `rows[bounds[c]..bounds[c + 1]]`.
-    pub fn by_chunk(
-        &mut self,
-        schedule: &PairSchedule,
-        n: usize,
-        chunk: usize,
-    ) -> (Vec<SumRows<'_>>, Vec<usize>) {
-        // What is left of each block's sums: the particles below the current chunk are cut off.
-        let mut rest: Vec<SumRows> = Vec::with_capacity(schedule.blocks.len());
-        let (mut f, mut t) = (&mut self.force[..], &mut self.torque[..]);
-        for b in &schedule.blocks {
-            let (bf, tail) = std::mem::take(&mut f).split_at_mut(b.touch.len());
-            f = tail;
-            let (bt, tail) = std::mem::take(&mut t).split_at_mut(b.touch.len());
-            t = tail;
-            rest.push(SumRows {
-                start: b.touch.start,
-                force: bf,
-                torque: bt,
-            });
-        }
-        let chunks = n.div_ceil(chunk);
-        let mut rows = Vec::with_capacity(2 * chunks + rest.len());
-        let mut bounds = Vec::with_capacity(chunks + 1);
-        bounds.push(0);
-        for c in 0..chunks {
-            let end = ((c + 1) * chunk).min(n);
-            for r in &mut rest {
-                if r.start < end && !r.force.is_empty() {
-                    let len = (end - r.start).min(r.force.len());
-                    let (f, tail) = std::mem::take(&mut r.force).split_at_mut(len);
-                    r.force = tail;
-                    let (t, tail) = std::mem::take(&mut r.torque).split_at_mut(len);
-                    r.torque = tail;
-                    rows.push(SumRows {
-                        start: r.start,
-                        force: f,
-                        torque: t,
-                    });
-                    r.start += len;
-                }
-            }
-            bounds.push(rows.len());
-        }
-        (rows, bounds)
-    }
-}
-
-/// Evaluates every listed pair and adds its force and torques, on both particles, to the
-/// partial sums of its block. Returns how many pairs carry force. Run inside the
-/// simulation's thread pool, or on `team`.
+/// Evaluates every listed pair and adds its force and torques, on both particles, to
+/// `force` and `torque` (one row per particle, holding what the sums start from). Returns
+/// how many pairs carry force. Run inside the simulation's thread pool, or on `team`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn add_pair_forces(
     p: &Particles,
     model: &ContactModel,
     pairs: &mut PairList,
     schedule: &PairSchedule,
-    sums: &mut PartialSums,
+    (force, torque): (&mut [DVec3], &mut [DVec3]),
     (dt, time): (f64, f64),
     path: PairPath,
     team: Option<&Team>,
@@ -126,32 +57,15 @@ pub(super) fn add_pair_forces(
     // Bonds are evaluated by the scalar pipeline only: the simulation picks `OneByOne` once
     // bonds are formed.
     debug_assert!(path == PairPath::OneByOne || !pairs_hold_bonds(model, history, stride));
-    // Sized at a new schedule only, with an eighth to spare rather than doubling: at
-    // 100,000 particles they are 10 MB. Zero, as the last particle phase left them, so
-    // only what they grow by needs zeroing (all of it was, serially, at every rebuild).
-    if sums.force.len() != schedule.sums_len {
-        resized(&mut sums.force, schedule.sums_len);
-        resized(&mut sums.torque, schedule.sums_len);
-    }
-    debug_assert!(
-        sums.force
-            .iter()
-            .chain(&sums.torque)
-            .all(|&s| s == DVec3::ZERO)
-    );
-    // Each block's history rows and partial sums (both in block order).
-    let mut tasks = Vec::with_capacity(schedule.blocks.len());
-    let (mut h_rest, mut f_rest, mut t_rest) =
-        (&mut history[..], &mut sums.force[..], &mut sums.torque[..]);
+    assert!(force.len() == p.len() && torque.len() == p.len());
+    // Each block's history rows (in block order).
+    let mut rows: Vec<Option<&mut [f64]>> = Vec::with_capacity(schedule.blocks.len());
+    let mut h_rest = &mut history[..];
     for b in &schedule.blocks {
         let len = (row_start[b.rows.end] - row_start[b.rows.start]) as usize * stride;
         let (h, tail) = std::mem::take(&mut h_rest).split_at_mut(len);
         h_rest = tail;
-        let (f, tail) = std::mem::take(&mut f_rest).split_at_mut(b.touch.len());
-        f_rest = tail;
-        let (t, tail) = std::mem::take(&mut t_rest).split_at_mut(b.touch.len());
-        t_rest = tail;
-        tasks.push((b, h, f, t));
+        rows.push(Some(h));
     }
     let ctx = Ctx {
         p,
@@ -167,12 +81,35 @@ pub(super) fn add_pair_forces(
         dt,
         time,
     };
-    map_items(team, tasks, |_, (block, h, f, t)| match path {
-        PairPath::OneByOne => ctx.block(block, h, f, t),
-        lanes => ctx.block_lanes(lanes, block, h, f, t),
-    })
-    .into_iter()
-    .sum()
+    let mut carrying = 0;
+    for phase in &schedule.phases {
+        // The phase's blocks by where their particles start: their rows of the sums are
+        // disjoint (the schedule keeps them so), cut from one pass over the arrays.
+        let mut order = phase.clone();
+        order.sort_by_key(|&b| schedule.blocks[b].touch.start);
+        let mut tasks = Vec::with_capacity(order.len());
+        let (mut f_rest, mut t_rest, mut at) = (&mut force[..], &mut torque[..], 0);
+        for b in order {
+            let block = &schedule.blocks[b];
+            let skip = block.touch.start - at;
+            let (_, tail) = std::mem::take(&mut f_rest).split_at_mut(skip);
+            let (f, tail) = tail.split_at_mut(block.touch.len());
+            f_rest = tail;
+            let (_, tail) = std::mem::take(&mut t_rest).split_at_mut(skip);
+            let (t, tail) = tail.split_at_mut(block.touch.len());
+            t_rest = tail;
+            at = block.touch.end;
+            let h = rows[b].take().expect("each block in one phase");
+            tasks.push((block, h, f, t));
+        }
+        carrying += map_items(team, tasks, |_, (block, h, f, t)| match path {
+            PairPath::OneByOne => ctx.block(block, h, f, t),
+            lanes => ctx.block_lanes(lanes, block, h, f, t),
+        })
+        .into_iter()
+        .sum::<usize>();
+    }
+    carrying
 }
 
 /// Whether any history row holds an intact bond (for a debug check).
@@ -198,9 +135,8 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    /// One block's pairs in list order; `force` and `torque` are the block's partial sums
-    /// (of particles `block.touch`, zero on entry), `history` its history rows. Returns the pairs carrying
-    /// force.
+    /// One block's pairs in list order; `force` and `torque` are the sums of particles
+    /// `block.touch`, `history` the block's history rows. Returns the pairs carrying force.
     fn block(
         &self,
         block: &Block,

@@ -1,6 +1,7 @@
-//! The particle phase's sum and second half kick for one chunk: each particle's force and
-//! torque (gravity, its share of each block's partial sums in block order, its walls in
-//! list order), then v += F dt/2m, omega += T dt/2I and the velocity half of the cheap test.
+//! The particle phase's second half kick for one chunk: each particle's force and torque
+//! (gravity and its pairs', as the pair phase left them, then its walls in list order), then
+//! v += F dt/2m, omega += T dt/2I and the velocity half of the cheap test; and the rows the
+//! next pair phase adds to, set to gravity's force and no torque.
 //!
 //! Written coordinate by coordinate over the chunk's flat arrays ([`super::flat`]) and
 //! compiled once per instruction set, as the pair phase is: each particle's sum takes the
@@ -8,15 +9,14 @@
 //! on every path and thread count.
 
 use super::flat::{FLAT, GROUP, length_squared, load3, on_widest, repeat3, spread3, store3};
-use super::pair_forces::SumRows;
 use super::plausible_motion;
 use super::wall_forces::WallOut;
 use crate::contact::lanes::{F, LANES, M, map};
 use glam::DVec3;
 
-/// One chunk's rows: particles `first..first + f.len()`.
+/// One chunk's rows.
 pub(super) struct ChunkSums<'a> {
-    pub first: usize,
+    /// The force and torque sums the pair phase left (gravity and the pairs').
     pub f: &'a mut [DVec3],
     pub t: &'a mut [DVec3],
     pub v: &'a mut [DVec3],
@@ -25,10 +25,13 @@ pub(super) struct ChunkSums<'a> {
     pub mass: &'a [f64],
     /// The chunk's kick factors (dt/2m, dt/2I), when the step kicks.
     pub kick: Option<&'a [(f64, f64)]>,
+    /// The rows the next pair phase adds to: set here to m g and zero.
+    pub next_f: &'a mut [DVec3],
+    pub next_t: &'a mut [DVec3],
 }
 
-/// The chunk's walls: particle `first + k` has outputs `outs[start[k] - base..start[k + 1]
-/// - base]`.
+/// The chunk's walls: particle `k` of the chunk has outputs `outs[start[k] - base..start[k +
+/// 1] - base]`.
 pub(super) struct ChunkWalls<'a> {
     pub outs: &'a [WallOut],
     pub start: &'a [u32],
@@ -36,58 +39,49 @@ pub(super) struct ChunkWalls<'a> {
 }
 
 on_widest! {
-    /// Sums and kicks one chunk, leaving each block's rows zero; returns whether every kicked
-    /// particle passed the velocity half of the cheap test.
+    /// Finishes the sums, kicks and readies the next sums of one chunk; returns whether
+    /// every kicked particle passed the velocity half of the cheap test.
     pub(super) fn sum_and_kick(
         c: ChunkSums,
         gravity: DVec3,
-        blocks: &mut [SumRows],
         walls: ChunkWalls,
         limit2: f64,
     ) -> bool => sum_and_kick_body
 }
 
+/// `m g` for each particle into `f` and zero into `t`: where every force sum starts.
+#[inline(always)]
+pub(super) fn start_sums(f: &mut [DVec3], t: &mut [DVec3], mass: &[f64], gravity: DVec3) {
+    let n = f.len();
+    let whole = n - n % GROUP;
+    let g = repeat3(gravity.to_array());
+    let ff: &mut [f64] = bytemuck::cast_slice_mut(&mut f[..whole]);
+    for grp in 0..whole / GROUP {
+        let m = spread3(map!(|k| mass[grp * GROUP + k]));
+        store3(ff, grp * FLAT, std::array::from_fn(|r| g[r] * m[r]));
+    }
+    for k in whole..n {
+        f[k] = gravity * mass[k];
+    }
+    bytemuck::cast_slice_mut::<DVec3, f64>(t).fill(0.0);
+}
+
 /// Inlined into each instruction set's copy above.
 #[inline(always)]
-fn sum_and_kick_body(
-    c: ChunkSums,
-    gravity: DVec3,
-    blocks: &mut [SumRows],
-    walls: ChunkWalls,
-    limit2: f64,
-) -> bool {
+fn sum_and_kick_body(c: ChunkSums, gravity: DVec3, walls: ChunkWalls, limit2: f64) -> bool {
     let ChunkSums {
-        first,
         f,
         t,
         v,
         w,
         mass,
         kick,
+        next_f,
+        next_t,
     } = c;
     let n = f.len();
     let whole = n - n % GROUP;
-    // Gravity first, then every block's rows of this chunk in block order, each a run of
-    // consecutive particles: a particle's sum grows in the order one particle at a time
-    // would add to it.
-    {
-        let g = repeat3(gravity.to_array());
-        let ff: &mut [f64] = bytemuck::cast_slice_mut(&mut f[..whole]);
-        for grp in 0..whole / GROUP {
-            let m = spread3(map!(|k| mass[grp * GROUP + k]));
-            store3(ff, grp * FLAT, std::array::from_fn(|r| g[r] * m[r]));
-        }
-        for k in whole..n {
-            f[k] = gravity * mass[k];
-        }
-        bytemuck::cast_slice_mut::<DVec3, f64>(t).fill(0.0);
-    }
-    for b in blocks.iter_mut() {
-        let at = b.start - first;
-        let rows = at..at + b.force.len();
-        add_and_zero(&mut f[rows.clone()], b.force);
-        add_and_zero(&mut t[rows], b.torque);
-    }
+    start_sums(next_f, next_t, mass, gravity);
     for k in 0..n {
         let list = walls.start[k] as usize - walls.base..walls.start[k + 1] as usize - walls.base;
         for o in &walls.outs[list] {
@@ -135,16 +129,6 @@ fn sum_and_kick_body(
     all
 }
 
-/// `sum += rows`, coordinate by coordinate, leaving `rows` zero.
-#[inline(always)]
-fn add_and_zero(sum: &mut [DVec3], rows: &mut [DVec3]) {
-    let s: &mut [f64] = bytemuck::cast_slice_mut(sum);
-    let r: &mut [f64] = bytemuck::cast_slice_mut(rows);
-    for (s, r) in s.iter_mut().zip(r.iter_mut()) {
-        *s += std::mem::take(r);
-    }
-}
-
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
@@ -165,26 +149,17 @@ pub(super) mod tests {
     /// loops: the oracle for their bits.
     #[allow(clippy::too_many_arguments)]
     fn one_at_a_time(
-        first: usize,
         (f, t, v, w): (&mut [DVec3], &mut [DVec3], &mut [DVec3], &mut [DVec3]),
+        (next_f, next_t): (&mut [DVec3], &mut [DVec3]),
         mass: &[f64],
         kick: &[(f64, f64)],
         gravity: DVec3,
-        blocks: &[(usize, Vec<DVec3>, Vec<DVec3>)],
         walls: &ChunkWalls,
         limit2: f64,
     ) -> bool {
         let mut all = true;
         for k in 0..f.len() {
-            let i = first + k;
-            let mut fk = gravity * mass[k];
-            let mut tk = DVec3::ZERO;
-            for (start, bf, bt) in blocks {
-                if i >= *start && i < start + bf.len() {
-                    fk += bf[i - start];
-                    tk += bt[i - start];
-                }
-            }
+            let (mut fk, mut tk) = (f[k], t[k]);
             for o in &walls.outs
                 [walls.start[k] as usize - walls.base..walls.start[k + 1] as usize - walls.base]
             {
@@ -199,6 +174,8 @@ pub(super) mod tests {
             v[k] += fk * kv;
             w[k] += tk * kw;
             all &= plausible_motion(v[k], w[k], limit2);
+            next_f[k] = gravity * mass[k];
+            next_t[k] = DVec3::ZERO;
         }
         all
     }
@@ -214,24 +191,16 @@ pub(super) mod tests {
     fn the_flat_loops_give_the_bits_of_one_particle_at_a_time() {
         let mut x = values(7);
         let vec3 = |x: &mut dyn FnMut() -> f64| DVec3::new(x(), x(), x());
-        for (n, first) in [(128usize, 256usize), (77, 1024), (5, 0)] {
+        for n in [128usize, 77, 5] {
             for fail in [false, true] {
                 let mass: Vec<f64> = (0..n).map(|_| x().abs() + 1e-3).collect();
                 let kick: Vec<(f64, f64)> = (0..n).map(|_| (x(), x())).collect();
                 let v0: Vec<DVec3> = (0..n).map(|_| vec3(&mut x)).collect();
                 let w0: Vec<DVec3> = (0..n).map(|_| vec3(&mut x)).collect();
-                // Three blocks: one over the whole chunk, two over parts of it.
-                let spans = [(first, n), (first + n / 3, n - n / 3), (first, n / 2)];
-                let mut blocks: Vec<(usize, Vec<DVec3>, Vec<DVec3>)> = spans
-                    .iter()
-                    .map(|&(s, len)| {
-                        let bf = (0..len).map(|_| vec3(&mut x)).collect();
-                        let bt = (0..len).map(|_| vec3(&mut x)).collect();
-                        (s, bf, bt)
-                    })
-                    .collect();
+                let mut f0: Vec<DVec3> = (0..n).map(|_| vec3(&mut x)).collect();
+                let t0: Vec<DVec3> = (0..n).map(|_| vec3(&mut x)).collect();
                 if fail {
-                    blocks[1].1[n / 2 - n / 3] = DVec3::new(f64::NAN, 0.0, 0.0);
+                    f0[n / 2] = DVec3::new(f64::NAN, 0.0, 0.0);
                 }
                 // Wall outputs for every third particle, two for every ninth.
                 let mut start = vec![10u32];
@@ -255,47 +224,39 @@ pub(super) mod tests {
                 let gravity = DVec3::new(0.1, -0.2, -9.81);
                 let limit2 = 1e12;
 
-                let (mut fa, mut ta) = (vec![DVec3::ONE; n], vec![DVec3::ONE; n]);
+                let (mut fa, mut ta) = (f0.clone(), t0.clone());
                 let (mut va, mut wa) = (v0.clone(), w0.clone());
+                let (mut nfa, mut nta) = (vec![DVec3::ONE; n], vec![DVec3::ONE; n]);
                 let expected = one_at_a_time(
-                    first,
                     (&mut fa, &mut ta, &mut va, &mut wa),
+                    (&mut nfa, &mut nta),
                     &mass,
                     &kick,
                     gravity,
-                    &blocks,
                     &walls,
                     limit2,
                 );
                 assert_eq!(expected, !fail);
 
-                type Run = fn(ChunkSums, DVec3, &mut [SumRows], ChunkWalls, f64) -> bool;
+                type Run = fn(ChunkSums, DVec3, ChunkWalls, f64) -> bool;
                 let mut paths: Vec<(&str, Run)> = vec![("baseline", sum_and_kick_body)];
                 paths.push(("widest", sum_and_kick));
                 for (name, run) in paths {
-                    let (mut f, mut t) = (vec![DVec3::ONE; n], vec![DVec3::ONE; n]);
+                    let (mut f, mut t) = (f0.clone(), t0.clone());
                     let (mut v, mut w) = (v0.clone(), w0.clone());
-                    let mut sums = blocks.clone();
-                    let mut rows: Vec<SumRows> = sums
-                        .iter_mut()
-                        .map(|(s, bf, bt)| SumRows {
-                            start: *s,
-                            force: bf,
-                            torque: bt,
-                        })
-                        .collect();
+                    let (mut nf, mut nt) = (vec![DVec3::ONE; n], vec![DVec3::ONE; n]);
                     let passed = run(
                         ChunkSums {
-                            first,
                             f: &mut f,
                             t: &mut t,
                             v: &mut v,
                             w: &mut w,
                             mass: &mass,
                             kick: Some(&kick),
+                            next_f: &mut nf,
+                            next_t: &mut nt,
                         },
                         gravity,
-                        &mut rows,
                         ChunkWalls {
                             outs: &outs,
                             start: &start,
@@ -309,14 +270,11 @@ pub(super) mod tests {
                         ("torque", &t, &ta),
                         ("velocity", &v, &va),
                         ("spin", &w, &wa),
+                        ("next force", &nf, &nfa),
+                        ("next torque", &nt, &nta),
                     ] {
                         assert_eq!(first_difference(got, want), None, "{name}, n {n}: {what}");
                     }
-                    assert!(
-                        sums.iter()
-                            .all(|(_, bf, bt)| bf.iter().chain(bt).all(|s| *s == DVec3::ZERO)),
-                        "{name}: the block rows are left zero"
-                    );
                 }
             }
         }

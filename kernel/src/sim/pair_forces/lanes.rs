@@ -1,6 +1,6 @@
 //! The pair phase in lanes: a block's touching pairs gathered [`LANES`] at a time and
 //! evaluated through the laws' lane forms ([`LaneLaws::evaluate_lanes`]), each
-//! pair's output then added to the partial sums in list order, as the scalar loop adds it.
+//! pair's output then added to the force sums in list order, as the scalar loop adds it.
 //! A pair the lanes do not take (an established contact that no longer touches, which may
 //! end; coincident centres) goes through the scalar pipeline between two batches, so the
 //! sums see every pair in list order and come out with the scalar loop's bits.
@@ -254,7 +254,7 @@ impl Ctx<'_> {
         carrying
     }
 
-    /// Evaluates the batch's pairs and adds their outputs to the partial sums in list
+    /// Evaluates the batch's pairs and adds their outputs to the force sums in list
     /// order; empties the batch. Returns the pairs carrying force.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
