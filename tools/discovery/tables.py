@@ -21,6 +21,9 @@ import os
 import re
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from criterion_odds import chi2_survival  # noqa: E402
+
 READINGS = ["heap_cone_angle_deg", "tray_mass_g", "funnel_flow_rate_g_s", "funnel_residue_g"]
 HEADS = dict(zip(READINGS, ["cone angle (deg)", "tray mass (g)", "flow rate (g/s)", "residue (g)"]))
 
@@ -100,6 +103,34 @@ def hidden_tables(dirs, spec):
         print("| hidden | " + " | ".join(HEADS.get(o, o) for o in readings) + " |")
         print("|---" * (len(readings) + 1) + "|")
         print("\n".join(truth_rows))
+    chi2_table(dirs)
+
+
+def chi2_of(compare):
+    """A compare's chi^2 over all its rows (its readings' sum z_i^2), the rows, and the p-value:
+    what the proof's test judges a fit by (runner/tests/runner/discovery_proof.rs)."""
+    x = sum(v["chi2"][0] for v in compare["verdicts"])
+    n = sum(v["n"] for v in compare["verdicts"])
+    return x, n, chi2_survival(x, n)
+
+
+def chi2_table(dirs):
+    print()
+    print("The data's chi^2 over each study's rows (the test asks p >= 0.001 after the fit, and "
+          "a lower chi^2 than before it):")
+    print()
+    print("| hidden | before the fit | after | the truth itself |")
+    print("|---|---|---|---|")
+    for d in dirs:
+        cells = []
+        for name in ["1-compare", "4-compare", "5-truth"]:
+            path = f"{d}/{name}/compare.json"
+            if os.path.exists(path):
+                x, n, p = chi2_of(load(path))
+                cells.append(f"{x:.1f} on {n} (p = {p:.2g})")
+            else:
+                cells.append("-")
+        print(f"| {hidden(d)[0]} | " + " | ".join(cells) + " |")
 
 
 def null_table(root):
