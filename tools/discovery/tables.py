@@ -108,7 +108,10 @@ def hidden_tables(dirs, spec):
 
 def chi2_of(compare):
     """A compare's chi^2 over all its rows (its readings' sum z_i^2), the rows, and the p-value:
-    what the proof's test judges a fit by (runner/tests/runner/discovery_proof.rs)."""
+    what the proof's test judges a fit by (runner/tests/runner/discovery_proof.rs). None for a
+    compare without verdicts."""
+    if "verdicts" not in compare:
+        return None
     x = sum(v["chi2"][0] for v in compare["verdicts"])
     n = sum(v["n"] for v in compare["verdicts"])
     return x, n, chi2_survival(x, n)
@@ -119,17 +122,16 @@ def chi2_table(dirs):
     print("The data's chi^2 over each study's rows (the test asks p >= 0.001 after the fit, and "
           "a lower chi^2 than before it):")
     print()
-    print("| hidden | before the fit | after | the truth itself |")
+    print("| hidden | before the fit | after | the truth's own compare |")
     print("|---|---|---|---|")
     for d in dirs:
         cells = []
         for name in ["1-compare", "4-compare", "5-truth"]:
             path = f"{d}/{name}/compare.json"
-            if os.path.exists(path):
-                x, n, p = chi2_of(load(path))
-                cells.append(f"{x:.1f} on {n} (p = {p:.2g})")
-            else:
-                cells.append("-")
+            # "-": no such compare (a study run without TRUTH=1), or one written before
+            # `compare` gave its verdicts.
+            c = chi2_of(load(path)) if os.path.exists(path) else None
+            cells.append("-" if c is None else f"{c[0]:.1f} on {c[1]} (p = {c[2]:.2g})")
         print(f"| {hidden(d)[0]} | " + " | ".join(cells) + " |")
 
 

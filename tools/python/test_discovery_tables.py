@@ -37,11 +37,16 @@ def write_study(out: Path):
                      "conditions": {"moisture_pct": m}})
         rows.append({"observable": "funnel_flow_rate_g_s", "value": flow, "uncertainty": 10.0,
                      "conditions": {"moisture_pct": m}})
-    for stage, cone, flow in [("1-compare", 3.0, 50.0), ("4-compare", 0.6, 9.0)]:
+    # Each reading's sum of z^2 over its two rows, as `compare` writes it in `verdicts`.
+    for stage, cone, flow, chi2 in [("1-compare", 3.0, 50.0, (20.0, 10.0)),
+                                    ("4-compare", 0.6, 9.0, (2.0, 2.0))]:
         (out / stage).mkdir(parents=True)
         obs = {"heap_cone_angle_deg": {"rmse": cone}, "funnel_flow_rate_g_s": {"rmse": flow},
                "tray_mass_g": {"rmse": 0.0}, "funnel_residue_g": {"rmse": 0.0}}
-        (out / stage / "compare.json").write_text(json.dumps({"rows": rows, "observables": obs}))
+        verdicts = [{"observable": o, "n": 2, "chi2": [c, None]}
+                    for o, c in zip(["heap_cone_angle_deg", "funnel_flow_rate_g_s"], chi2)]
+        (out / stage / "compare.json").write_text(
+            json.dumps({"rows": rows, "observables": obs, "verdicts": verdicts}))
     (out / "2-diagnose").mkdir()
     cands = [{"name": "fines", "statistic": 40.0, "p_value": 1e-9, "strength": 0.16},
              {"name": "capillary", "statistic": 1.0, "p_value": 0.9, "strength": 0.01}]
@@ -99,6 +104,13 @@ class Tables(unittest.TestCase):
         text = tables_of_study(truth)
         # Cone: the fit's 0.6 and the truth's 0.7 against 0.5; flow: 9 and 5 against sqrt(50).
         self.assertIn(f"| fines | 1.20 (truth 1.40) | {9 / math.sqrt(50):.2f} (truth {5 / math.sqrt(50):.2f}) |", text)
+
+    def test_the_data_chi2_over_all_rows_before_and_after(self):
+        text = tables_of_study()
+        # chi^2_4 survival in closed form: P(chi^2_4 > x) = exp(-x/2) (1 + x/2).
+        before = math.exp(-15.0) * 16.0  # 20 + 10 over 4 rows
+        after = math.exp(-2.0) * 3.0  # 2 + 2 over 4 rows
+        self.assertIn(f"| fines | 30.0 on 4 (p = {before:.2g}) | 4.0 on 4 (p = {after:.2g}) | - |", text)
 
 
 if __name__ == "__main__":
