@@ -5,7 +5,11 @@ with its own synthetic data, has every reading's RMSE within 1.5x the injected n
     python3 tools/discovery/criterion_odds.py STUDY [STUDY ...] [--noise SPEC] [--draws N]
     python3 tools/discovery/criterion_odds.py --levels
     python3 tools/discovery/criterion_odds.py STUDY [STUDY ...] --test-bar R_J [R_J ...]
+    python3 tools/discovery/criterion_odds.py STUDY [STUDY ...] --chi2-test R_J [R_J ...] [--alpha A]
 
+`--chi2-test` gives the odds that such a fit fails the test's current check, the data's chi^2
+over a study's rows at significance A (default 0.001), with the runs' scatters sampled as
+`compare` estimates them (docs/discovery.md, "The refit judged by the data's chi^2").
 `--test-bar` gives instead the odds that a fit that found the truth misses the CI test's own
 bar (1.5x the larger of the data's noise and the truth's own RMSE) with R_J runs per condition
 in the judging compares (docs/discovery.md, "How often a fit that found the truth meets the
