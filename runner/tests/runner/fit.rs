@@ -1,6 +1,6 @@
 //! `tilth fit`: bad parameters are refused before any run; the fitted model file is what was
 //! simulated (compare of it, with the same seeds, gives the RMSE fit reported); the best
-//! setting is never worse than the start.
+//! setting is never worse than the start; the standard errors count the Jacobian's noise.
 
 use std::path::PathBuf;
 
@@ -169,7 +169,15 @@ fn a_fit_stops_where_the_residuals_reach_the_noise() {
         !out.join("runs/iter-1").exists(),
         "stepped on from the noise"
     );
-    assert!(fit["standard_error"][0].as_f64().is_some());
+    // The Jacobian's noise only adds uncertainty: the corrected standard error is at least
+    // the uncorrected one, or not determined at all (noise as large as the signal).
+    let naive = fit["standard_error_uncorrected"][0].as_f64().unwrap();
+    match fit["standard_error"][0].as_f64() {
+        Some(se) => assert!(se >= naive, "corrected {se} under the uncorrected {naive}"),
+        None => assert!(fit["standard_error"][0].is_null()),
+    }
+    let noise = fit["jacobian_noise"][0][0].as_f64().unwrap();
+    assert!(noise >= 0.0, "the Jacobian's noise variance {noise}");
     let md = std::fs::read_to_string(out.join("fit.md")).unwrap();
     assert!(md.contains("Stopped at the noise"), "{md}");
 }

@@ -18,7 +18,10 @@
 //! each row's standard error sqrt(uncertainty^2 + s^2 / R), s the current setting's scatter:
 //! chi^2 = sum z^2. The step solves (J'J + lambda diag J'J) d = J'z, limited to a quarter of
 //! each range; a step that raises chi^2 is taken back, lambda raised and the next step at most half as long (Marquardt 1963).
-//! Standard errors from (J'J)^-1, scaled by chi^2 / dof when that is above 1.
+//! Standard errors from (J'J - N)^-1, scaled by chi^2 / dof when that is above 1, where N is
+//! the noise the finite-difference Jacobian carries into J'J, measured from the per-seed
+//! slopes (`jacobian_noise.rs`); the naive (J'J)^-1 is reported beside them as a lower
+//! bound.
 //!
 //! The fit stops at the first setting at the noise (`stop.rs`): chi^2 <= dof, and the next
 //! step's predicted chi^2 gain (the score statistic) under chi^2_P's 95 % quantile. A step
@@ -30,6 +33,7 @@
 //! `DIR/fit.md`, and `DIR/model.toml`: the model with the fitted parameters, ready for
 //! `tilth compare`. Runs go to `DIR/runs/iter-K/<variant>/` and resume.
 
+mod jacobian_noise;
 mod stop;
 
 use super::compare::{LabRunArgs, Simulate, TestSetting, mean_sd, prefetch, simulate, std_error};
@@ -39,6 +43,7 @@ use crate::lab::model::Model;
 use crate::sweep::execute;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
+use jacobian_noise::{covariance, jacobian_noise};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -192,8 +197,29 @@ pub struct Step {
     pub predicted_gain: Option<f64>,
 }
 
-/// The simulated row means (None where a run failed) and scatters at one setting.
-type Sims = (Vec<Option<f64>>, Vec<Option<f64>>);
+/// The best setting so far.
+struct Best {
+    theta: Vec<f64>,
+    chi2: f64,
+    /// The rows' simulated means and their standard errors.
+    centre: Vec<f64>,
+    se: Vec<f64>,
+    /// The Jacobian (standardised by `se`) and the noise it carries into J'J
+    /// (`jacobian_noise.rs`).
+    jac: DMatrix<f64>,
+    noise: DMatrix<f64>,
+}
+
+/// The simulated rows at one setting.
+struct Sims {
+    /// Each row's mean, None where a run failed.
+    mean: Vec<Option<f64>>,
+    /// Each row's scatter (sample standard deviation).
+    scatter: Vec<Option<f64>>,
+    /// Each row's values, seed by seed (seeds 1..R in order, all of them where `mean` is
+    /// Some).
+    seeds: Vec<Vec<f64>>,
+}
 
 /// The runs of every row with the model file `model`, in `out`: replicates 1..R.
 fn at<'a>(
@@ -254,7 +280,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     // Simulates every row with the model file `path`, into `out`.
     let run_at = |path: &Path, out: &Path| -> Result<Sims> {
         let sims = simulate(&rows, &at(path, out, args, &set), &stop)?;
-        Ok(sims
+        let (mean, scatter) = sims
             .iter()
             .map(|(v, _)| {
                 if v.len() == args.replicates {
@@ -264,7 +290,12 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                     (None, None)
                 }
             })
-            .unzip())
+            .unzip();
+        Ok(Sims {
+            mean,
+            scatter,
+            seeds: sims.into_iter().map(|(v, _)| v).collect(),
+        })
     };
     // Simulates every row at `theta`, as variant `name` of iteration `it`.
     let run = |it: usize, name: &str, theta: &[f64]| -> Result<Sims> {
@@ -272,7 +303,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         run_at(&path, &out)
     };
     let mut theta: Vec<f64> = params.iter().map(|p| p.start).collect();
-    let mut best: Option<(Vec<f64>, f64, Vec<f64>, Vec<f64>, DMatrix<f64>)> = None;
+    let mut best: Option<Best> = None;
     let mut lambda = 1e-3;
     let mut radius = 0.25;
     // The last step, as a fraction of each range (its largest component).
@@ -288,7 +319,11 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 show(&params, &theta)
             );
         }
-        let (centre, scatter) = run(it, "centre", &theta)?;
+        let Sims {
+            mean: centre,
+            scatter,
+            seeds: centre_seeds,
+        } = run(it, "centre", &theta)?;
         let failed: Vec<String> = rows
             .iter()
             .zip(&centre)
@@ -320,7 +355,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             .map(|((m, c), s)| (m.value - c) / s)
             .collect();
         let chi2: f64 = z.iter().map(|v| v * v).sum();
-        let accepted = best.as_ref().is_none_or(|b| chi2 < b.1);
+        let accepted = best.as_ref().is_none_or(|b| chi2 < b.chi2);
         history.push(Step {
             iteration: it,
             theta: theta.clone(),
@@ -334,10 +369,17 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             if it == args.iterations {
                 // No step follows: the standard errors use the last Jacobian, one step
                 // back (not worth P more settings of runs).
-                let jac = best
-                    .map(|b| b.4)
-                    .unwrap_or_else(|| DMatrix::zeros(rows.len(), n));
-                best = Some((theta.clone(), chi2, centre, se, jac));
+                let (jac, noise) = best
+                    .map(|b| (b.jac, b.noise))
+                    .unwrap_or_else(|| (DMatrix::zeros(rows.len(), n), DMatrix::zeros(n, n)));
+                best = Some(Best {
+                    theta: theta.clone(),
+                    chi2,
+                    centre,
+                    se,
+                    jac,
+                    noise,
+                });
                 break;
             }
             // The Jacobian at the new best setting, standardised by its standard errors.
@@ -366,10 +408,14 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 .collect();
             prefetch(&rows, &hows)?;
             let mut jac = DMatrix::zeros(rows.len(), n);
+            let mut moved_seeds = Vec::with_capacity(n);
             for (j, p) in params.iter().enumerate() {
                 let h = steps[j];
                 let (path, out) = &moved_settings[j];
-                let (moved, _) = run_at(path, out)?;
+                let Sims {
+                    mean: moved, seeds, ..
+                } = run_at(path, out)?;
+                moved_seeds.push(seeds);
                 for i in 0..rows.len() {
                     let m = moved[i].ok_or_else(|| {
                         anyhow!(
@@ -381,9 +427,17 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                     jac[(i, j)] = (m - centre[i]) / h / se[i];
                 }
             }
+            let noise = jacobian_noise(&centre_seeds, &moved_seeds, &steps, &se);
             let gain = predicted_gain(&jac, &z);
             history.last_mut().expect("pushed above").predicted_gain = gain;
-            best = Some((theta.clone(), chi2, centre, se, jac));
+            best = Some(Best {
+                theta: theta.clone(),
+                chi2,
+                centre,
+                se,
+                jac,
+                noise,
+            });
             if at_noise(chi2, dof, gain, n) && !args.to_minimum {
                 if !args.lab.quiet {
                     eprintln!(
@@ -404,15 +458,14 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 break;
             }
         }
-        let (b_theta, _, _, _, jac) = best.as_ref().unwrap();
-        let b_z: Vec<f64> = {
-            let b = best.as_ref().unwrap();
-            rows.iter()
-                .zip(&b.2)
-                .zip(&b.3)
-                .map(|((m, c), s)| (m.value - c) / s)
-                .collect()
-        };
+        let b = best.as_ref().unwrap();
+        let (b_theta, jac) = (&b.theta, &b.jac);
+        let b_z: Vec<f64> = rows
+            .iter()
+            .zip(&b.centre)
+            .zip(&b.se)
+            .map(|((m, c), s)| (m.value - c) / s)
+            .collect();
         let jtj = jac.transpose() * jac;
         let jtz = jac.transpose() * DVector::from_vec(b_z);
         let mut a = jtj.clone();
@@ -443,12 +496,23 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         theta = next;
     }
 
-    let (b_theta, b_chi2, b_centre, _, jac) = best.expect("iteration 0 ran");
+    let Best {
+        theta: b_theta,
+        chi2: b_chi2,
+        centre: b_centre,
+        jac,
+        noise,
+        ..
+    } = best.expect("iteration 0 ran");
     let scale = (b_chi2 / dof as f64).max(1.0);
-    let cov = (jac.transpose() * &jac).try_inverse().map(|c| c * scale);
-    let sd: Vec<Option<f64>> = (0..n)
-        .map(|k| cov.as_ref().map(|c| c[(k, k)].max(0.0).sqrt()))
-        .collect();
+    let cov = covariance(&jac, &noise, scale);
+    let naive = covariance(&jac, &DMatrix::zeros(n, n), scale);
+    let sd_of = |cov: &Option<DMatrix<f64>>| -> Vec<Option<f64>> {
+        (0..n)
+            .map(|k| cov.as_ref().map(|c| c[(k, k)].max(0.0).sqrt()))
+            .collect()
+    };
+    let (sd, sd_naive) = (sd_of(&cov), sd_of(&naive));
     let corr: Option<Vec<Vec<f64>>> = cov.as_ref().map(|c| {
         (0..n)
             .map(|a| {
@@ -481,6 +545,8 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         "parameters": params,
         "estimate": b_theta,
         "standard_error": sd,
+        "standard_error_uncorrected": sd_naive,
+        "jacobian_noise": (0..n).map(|j| (0..n).map(|k| noise[(j, k)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
         "correlation": corr,
         "chi2": b_chi2,
         "dof": dof,
@@ -492,7 +558,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     });
     std::fs::write(args.out.join("fit.json"), serde_json::to_vec_pretty(&json)?)?;
     let mut md = format!(
-        "# Fit of {} to {}\n\n{} rows, {} replicates per setting, {} free parameter{}.\n\n| parameter | start | estimate | standard error | range |\n|---|---|---|---|---|\n",
+        "# Fit of {} to {}\n\n{} rows, {} replicates per setting, {} free parameter{}.\n\n| parameter | start | estimate | standard error | uncorrected (a lower bound) | range |\n|---|---|---|---|---|---|\n",
         args.model.display(),
         args.data.display(),
         rows.len(),
@@ -502,15 +568,21 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     );
     for (k, p) in params.iter().enumerate() {
         md += &format!(
-            "| {} | {:.4} | {:.4} | {} | [{:.4}, {:.4}] |\n",
+            "| {} | {:.4} | {:.4} | {} | {} | [{:.4}, {:.4}] |\n",
             describe(p),
             p.start,
             b_theta[k],
-            sd[k].map_or("-".into(), |s| format!("{s:.4}")),
+            sd[k].map_or("not determined".into(), |s| format!("{s:.4}")),
+            sd_naive[k].map_or("-".into(), |s| format!("{s:.4}")),
             p.low,
             p.high
         );
     }
+    md += "\nThe standard errors take off J'J the noise the finite-difference Jacobian carries (the runs' chaos, measured from the per-seed slopes); the uncorrected ones, (J'J)^-1, understate the uncertainty.";
+    if sd.iter().any(Option::is_none) {
+        md += " Not determined: once that noise is taken off, the runs do not show how the readings move with the parameters; more replicates (`--replicates`) would.";
+    }
+    md += "\n";
     md += &format!(
         "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}). {}\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
         b_chi2,
