@@ -13,8 +13,9 @@
 //! `LOW:HIGH@START`, e.g. diagnose's estimate).
 //!
 //! Levenberg-Marquardt with finite-difference Jacobians. Each iteration runs the current
-//! setting and each parameter moved by 5 % of its range, all with seeds 1..R (common random
-//! numbers: the differences carry less of the runs' scatter). Residuals are standardised by
+//! setting and each parameter moved by a quarter of its range (`JACOBIAN_STEP`), all with
+//! seeds 1..R (common random numbers, though the grains' chaos leaves two runs of one seed
+//! little alike after the change). Residuals are standardised by
 //! each row's standard error sqrt(uncertainty^2 + s^2 / R), s the current setting's scatter:
 //! chi^2 = sum z^2. The step solves (J'J + lambda diag J'J) d = J'z, limited to a quarter of
 //! each range; a step that raises chi^2 is taken back, lambda raised and the next step at most half as long (Marquardt 1963).
@@ -196,6 +197,20 @@ pub struct Step {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub predicted_gain: Option<f64>,
 }
+
+/// How far each parameter is moved for the finite-difference Jacobian, as a fraction of its
+/// range: as far as a step may go (the trust radius starts at a quarter of each range), so
+/// the secant describes the readings over the region a step can reach.
+///
+/// Not less: the grains' chaos decorrelates the runs of one seed after any change, so each
+/// slope carries noise of variance 2 s^2 / (R h^2), s the runs' scatter. At 5 % of the range
+/// (until 2026-11-30) that noise was larger than the slopes themselves on the discovery
+/// proof's draws, so J'J was mostly noise: steps came out short, the estimates stayed near
+/// their start, and the standard errors were 2-6x too small (docs/discovery.md, "`fit`'s
+/// standard errors are too small"). A simulation of the fit on a model of two parameters
+/// (`tools/discovery/fit_steps.py`) puts the coverage of the 95 % interval at 0.14-0.80 with
+/// 5 % steps and 0.94-0.96 with 25 %.
+const JACOBIAN_STEP: f64 = 0.25;
 
 /// The best setting so far.
 struct Best {
@@ -383,12 +398,13 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 break;
             }
             // The Jacobian at the new best setting, standardised by its standard errors.
-            // Each parameter moved by 5 % of its range (backwards at its upper bound).
+            // Each parameter moved by `JACOBIAN_STEP` of its range (backwards at its upper
+            // bound).
             let steps: Vec<f64> = params
                 .iter()
                 .enumerate()
                 .map(|(j, p)| {
-                    let h0 = 0.05 * (p.high - p.low);
+                    let h0 = JACOBIAN_STEP * (p.high - p.low);
                     if theta[j] + h0 <= p.high { h0 } else { -h0 }
                 })
                 .collect();
