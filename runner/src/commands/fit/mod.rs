@@ -207,9 +207,12 @@ pub struct Step {
 /// (until 2026-11-30) that noise was larger than the slopes themselves on the discovery
 /// proof's draws, so J'J was mostly noise: steps came out short, the estimates stayed near
 /// their start, and the standard errors were 2-6x too small (docs/discovery.md, "`fit`'s
-/// standard errors are too small"). A simulation of the fit on a model of two parameters
-/// (`tools/discovery/fit_steps.py`) puts the coverage of the 95 % interval at 0.14-0.80 with
-/// 5 % steps and 0.94-0.96 with 25 %.
+/// standard errors are too small"). A simulation of this fit on a model of two parameters
+/// whose truth is known (`tools/discovery/fit_steps.py`, 400 draws each): with 5 % steps
+/// the estimates fall short of the truth by up to 1.6 of their exact standard deviations
+/// and the 95 % interval holds it in 5-77 % of the draws; with 25 %, the bias is under 0.25
+/// of them and the interval holds it in 85-95 % of the draws with (J'J)^-1, 95-97 % with
+/// the Jacobian's noise taken off.
 const JACOBIAN_STEP: f64 = 0.25;
 
 /// The best setting so far.
