@@ -56,16 +56,21 @@ def rms(xs):
 
 def hidden_tables(dirs, spec):
     print("| hidden (strength) | ranked first | statistic | p (Holm) | estimated strength "
-          "| second (p) | fitted strength | chi^2 / dof after |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| second (p) | fitted strength | its standard error | z | chi^2 / dof after |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for d in dirs:
         effect, strength = hidden(d)
         c = load(f"{d}/2-diagnose/diagnosis.json")["candidates"]
         fit = load(f"{d}/3-fit/fit.json")
         k = next(i for i, p in enumerate(fit["parameters"]) if p["label"].startswith("candidate."))
+        # The fit's standard error (null: not determined; absent before 2026-11-30) and how
+        # many of them the fitted strength is from the hidden one, when it is that candidate.
+        se = (fit.get("standard_error") or [None] * (k + 1))[k]
+        z = (fit["estimate"][k] - float(strength)) / se if se and fit["parameters"][k]["label"] == f"candidate.{effect}" else None
         print(f"| {effect} ({strength}) | {c[0]['name']} | {c[0]['statistic']:.1f} | {c[0]['p_value']:.2g} "
               f"| {c[0]['strength']:.4f} | {c[1]['name']} ({c[1]['p_value']:.2g}) "
-              f"| {fit['estimate'][k]:.4f} | {fit['chi2']:.1f} / {fit['dof']} |")
+              f"| {fit['estimate'][k]:.4f} | {'-' if se is None else f'{se:.4f}'} "
+              f"| {'-' if z is None else f'{z:.2f}'} | {fit['chi2']:.1f} / {fit['dof']} |")
     print()
     print("RMSE before -> after the fit (after / the data's noise, after / the injected noise):")
     print()

@@ -28,7 +28,7 @@ def load_tables():
     return SimpleNamespace(**runpy.run_path(str(REPO / "tools" / "discovery" / "tables.py")))
 
 
-def write_study(out: Path):
+def write_study(out: Path, standard_error=(0.02, 0.004)):
     """A study with two readings at two moistures: the cone angle (absolute noise) and the
     flow rate (relative noise)."""
     rows = []
@@ -53,18 +53,18 @@ def write_study(out: Path):
     (out / "2-diagnose" / "diagnosis.json").write_text(json.dumps({"candidates": cands}))
     (out / "3-fit").mkdir()
     fit = {"parameters": [{"label": "soil-soil.rolling_friction"}, {"label": "candidate.fines"}],
-           "estimate": [0.01, 0.152], "chi2": 7.5, "dof": 6}
+           "estimate": [0.01, 0.152], "standard_error": list(standard_error), "chi2": 7.5, "dof": 6}
     (out / "3-fit" / "fit.json").write_text(json.dumps(fit))
     (out / "data.csv").write_text("test,observable,source\nrepose,x,synth: truth m.toml with fines=0.15; seed 1\n")
 
 
-def tables_of_study(truth=None) -> str:
+def tables_of_study(truth=None, **study) -> str:
     """tables.py's output for write_study's study (with a `5-truth/` of these observables'
     RMSEs if given), at noise 0.5 deg, 0.5 g, 2 % and 0.05 g."""
     t = load_tables()
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "hidden-fines"
-        write_study(out)
+        write_study(out, **study)
         if truth is not None:
             (out / "5-truth").mkdir()
             (out / "5-truth" / "compare.json").write_text(json.dumps({"observables": truth}))
@@ -90,13 +90,18 @@ class Tables(unittest.TestCase):
 
     def test_one_study_gives_both_ratios(self):
         text = tables_of_study()
-        self.assertIn("| fines (0.15) | fines | 40.0 | 1e-09 | 0.1600 | capillary (0.9) | 0.1520 | 7.5 / 6 |", text)
+        # The fitted strength 0.152 against the hidden 0.15, 0.004 its standard error: z = 0.5.
+        self.assertIn("| fines (0.15) | fines | 40.0 | 1e-09 | 0.1600 | capillary (0.9) | 0.1520 | 0.0040 | 0.50 | 7.5 / 6 |", text)
         # Cone: 0.6 against an RMS uncertainty of 1.0 and an injected 0.5.
         self.assertIn("3 -> 0.6 (0.60, 1.20)", text)
         # Flow: 9 against 10, and against 2 % of 400 and 300 g/s (8 and 6, RMS sqrt(50)).
         self.assertIn(f"50 -> 9 (0.90, {9 / math.sqrt(50):.2f})", text)
         self.assertIn(f"largest RMSE after: 0.90x the data's noise, {9 / math.sqrt(50):.2f}x the injected noise", text)
         self.assertNotIn("the truth itself", text)
+
+    def test_a_strength_the_fit_did_not_determine_has_no_z(self):
+        text = tables_of_study(standard_error=(0.02, None))
+        self.assertIn("| capillary (0.9) | 0.1520 | - | - | 7.5 / 6 |", text)
 
     def test_the_truths_own_error_beside_the_fits(self):
         truth = {"heap_cone_angle_deg": {"rmse": 0.7}, "funnel_flow_rate_g_s": {"rmse": 5.0},

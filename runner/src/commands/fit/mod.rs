@@ -228,6 +228,25 @@ struct Best {
     noise: DMatrix<f64>,
 }
 
+impl Best {
+    fn at(
+        theta: &[f64],
+        chi2: f64,
+        centre: Vec<f64>,
+        se: Vec<f64>,
+        (jac, noise): (DMatrix<f64>, DMatrix<f64>),
+    ) -> Best {
+        Best {
+            theta: theta.to_vec(),
+            chi2,
+            centre,
+            se,
+            jac,
+            noise,
+        }
+    }
+}
+
 /// The simulated rows at one setting.
 struct Sims {
     /// Each row's mean, None where a run failed.
@@ -390,14 +409,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
                 let (jac, noise) = best
                     .map(|b| (b.jac, b.noise))
                     .unwrap_or_else(|| (DMatrix::zeros(rows.len(), n), DMatrix::zeros(n, n)));
-                best = Some(Best {
-                    theta: theta.clone(),
-                    chi2,
-                    centre,
-                    se,
-                    jac,
-                    noise,
-                });
+                best = Some(Best::at(&theta, chi2, centre, se, (jac, noise)));
                 break;
             }
             // The Jacobian at the new best setting, standardised by its standard errors.
@@ -449,14 +461,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
             let noise = jacobian_noise(&centre_seeds, &moved_seeds, &steps, &se);
             let gain = predicted_gain(&jac, &z);
             history.last_mut().expect("pushed above").predicted_gain = gain;
-            best = Some(Best {
-                theta: theta.clone(),
-                chi2,
-                centre,
-                se,
-                jac,
-                noise,
-            });
+            best = Some(Best::at(&theta, chi2, centre, se, (jac, noise)));
             if at_noise(chi2, dof, gain, n) && !args.to_minimum {
                 if !args.lab.quiet {
                     eprintln!(
