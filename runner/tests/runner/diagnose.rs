@@ -107,3 +107,79 @@ fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
     assert!(md.contains("more_rolling is not identifiable"), "{md}");
     assert!(md.contains("It is not a discovery"), "{md}");
 }
+
+/// `--param-step` sets the free parameter's finite difference: with a step of 20 % of the
+/// range 0..0.5 (0.1, exact in binary), a candidate that raises the parameter by 0.1 runs the
+/// very models of that difference and is absorbed, as at the default step above.
+#[test]
+fn param_step_sets_the_free_parameters_finite_difference() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("diagnose-param-step");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut model = std::fs::read_to_string(root.join("models/li2022.toml")).unwrap();
+    model +=
+        "\n[candidates.more_rolling]\nstrength = [\"soil-soil.rolling_friction\"]\nstep = 0.1\n";
+    let model_path = dir.join("model.toml");
+    std::fs::write(&model_path, model).unwrap();
+    let data = dir.join("data.csv");
+    std::fs::write(
+        &data,
+        "test,moisture_pct,observable,value,unit,uncertainty\nrepose,6,repose_angle_deg,35.53,deg,1.0\nrepose,12,repose_angle_deg,43.87,deg,1.0\n",
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    let run = |step: &str| {
+        tilth(&[
+            "diagnose",
+            "--model",
+            model_path.to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--param",
+            "soil-soil.rolling_friction=0:0.5",
+            "--param-step",
+            step,
+            "--candidates",
+            "more_rolling",
+            "--replicates",
+            "2",
+            "--coarse",
+            "--cores",
+            "2",
+            "--quiet",
+        ])
+    };
+    // Refused before anything is written.
+    for bad in ["0", "0.6", "NaN"] {
+        let out = run(bad);
+        assert!(!out.status.success(), "--param-step {bad} was accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(&format!(
+                "--param-step {bad} is out of range: allowed (0, 0.5]"
+            )),
+            "{err}"
+        );
+        assert!(
+            !out_dir.exists(),
+            "--param-step {bad} wrote {}",
+            out_dir.display()
+        );
+    }
+    let out = run("0.2");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("diagnosis.json")).unwrap()).unwrap();
+    let more = &json["candidates"][0];
+    assert_eq!(more["name"], "more_rolling", "{json}");
+    assert_eq!(more["unidentified"], "absorbed", "{more}");
+    assert_eq!(more["significant"], false, "{more}");
+    assert!(more["distinct_fraction"].as_f64().unwrap() < 1e-9, "{more}");
+}
