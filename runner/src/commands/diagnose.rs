@@ -386,6 +386,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "set": args.lab.set.set,
         "alpha": args.alpha,
         "free_parameters": params,
+        "param_step": args.param_step,
         "rows_used": m,
         "rows_dropped": dropped,
         "rmse_now": now,
@@ -439,7 +440,13 @@ fn report(
         if free.is_empty() {
             "none".into()
         } else {
-            free.join(", ")
+            format!(
+                "{} (slopes from finite differences of {} % of each range)",
+                free.join(", "),
+                format!("{:.3}", 100.0 * args.param_step)
+                    .trim_end_matches('0')
+                    .trim_end_matches('.')
+            )
         },
         args.replicates,
         if args.replicates == 1 { "" } else { "s" },

@@ -182,4 +182,12 @@ fn param_step_sets_the_free_parameters_finite_difference() {
     assert_eq!(more["unidentified"], "absorbed", "{more}");
     assert_eq!(more["significant"], false, "{more}");
     assert!(more["distinct_fraction"].as_f64().unwrap() < 1e-9, "{more}");
+    assert_eq!(json["param_step"].as_f64(), Some(0.2), "{json}");
+    let md = std::fs::read_to_string(out_dir.join("diagnosis.md")).unwrap();
+    assert!(
+        md.contains(
+            "soil-soil.rolling_friction (slopes from finite differences of 20 % of each range)"
+        ),
+        "{md}"
+    );
 }
