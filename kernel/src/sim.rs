@@ -413,24 +413,31 @@ impl Simulation {
     /// [`Simulation::advance`]); the last step does not, so the state between runs is the
     /// ordinary end-of-step state.
     pub fn run(&mut self, n: u64) -> Result<()> {
-        // Enter the pool once: every parallel phase below then runs without a hand-off.
+        self.on_team(|sim, team| sim.steps(n, team))
+    }
+
+    /// Runs `f` inside the pool, entered once, so that every parallel phase in it runs
+    /// without a hand-off: on one thread as it is; on more, on the pool's first thread,
+    /// the others staying awake as its team (given to `f`).
+    fn on_team<R: Send>(
+        &mut self,
+        f: impl FnOnce(&mut Simulation, Option<&Team>) -> R + Send,
+    ) -> R {
         let pool = std::sync::Arc::clone(&self.pool);
         let helpers = pool.current_num_threads() - 1;
         if helpers == 0 {
-            return pool.install(|| self.steps(n, None));
+            return pool.install(|| f(self, None));
         }
-        // The pool's first thread leads the steps; the others stay awake as its team.
         let team = Team::new(helpers);
-        let leader = std::sync::Mutex::new(Some(self));
+        let leader = std::sync::Mutex::new(Some((self, f)));
         let mut out = pool.broadcast(|ctx| {
             if ctx.index() != 0 {
                 team.help(ctx.index());
                 return None;
             }
-            let sim = leader.lock().ok()?.take()?;
-            let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                sim.steps(n, Some(&team))
-            }));
+            let (sim, f) = leader.lock().ok()?.take()?;
+            let out =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(sim, Some(&team))));
             team.release();
             Some(out.unwrap_or_else(|p| std::panic::resume_unwind(p)))
         });
@@ -956,22 +963,23 @@ impl Simulation {
     /// the current state and returns the seconds they took. The contact history is put back
     /// before each (untimed), so every repetition does the same work as this step's pair
     /// phase; nothing else changes. Full runs vary by 5-10 % on a shared VM, these by about
-    /// 2 % (BENCHMARKS.md, twenty-first sitting).
+    /// 2 % (BENCHMARKS.md, twenty-first sitting). On more than one thread the phase runs on
+    /// the team a run keeps awake, as in [`Simulation::run`]; on rayon alone it scaled
+    /// 1.32x from one thread to two where runs scale 1.65-1.85x (fortieth sitting).
     pub fn time_pair_phase(&mut self, reps: usize) -> f64 {
         let saved = self.pairs.history.clone();
         // One entry into the pool: entering it per repetition would time a thread handoff.
-        let pool = self.pool.clone();
-        let seconds = pool.install(|| {
+        let seconds = self.on_team(|sim, team| {
             let mut seconds = 0.0;
             for _ in 0..reps {
-                self.pairs.history.copy_from_slice(&saved);
+                sim.pairs.history.copy_from_slice(&saved);
                 let t = std::time::Instant::now();
-                std::hint::black_box(self.pair_phase(None));
+                std::hint::black_box(sim.pair_phase(team));
                 seconds += t.elapsed().as_secs_f64();
                 // As the particle phase leaves them (untimed: it readies them as it reads
                 // this step's).
-                self.next_ready = None;
-                self.ready_next_sums();
+                sim.next_ready = None;
+                sim.ready_next_sums();
             }
             seconds
         });
