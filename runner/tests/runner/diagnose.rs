@@ -6,17 +6,18 @@ use std::path::{Path, PathBuf};
 
 use crate::tilth_in_root as tilth;
 
-#[test]
-fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("diagnose-absorbed");
+/// A fresh directory `name` with the study's model plus a candidate `more_rolling` that
+/// raises the free parameter (soil-soil rolling friction) by `step`, and two repose rows:
+/// (directory, model file, data file).
+fn absorbed_case(name: &str, step: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    // The study's model plus a candidate that raises the free parameter itself, by the same
-    // step as its finite difference (5 % of the range 0..0.5 = 0.025, exact in binary).
     let mut model = std::fs::read_to_string(root.join("models/li2022.toml")).unwrap();
-    model +=
-        "\n[candidates.more_rolling]\nstrength = [\"soil-soil.rolling_friction\"]\nstep = 0.025\n";
+    model += &format!(
+        "\n[candidates.more_rolling]\nstrength = [\"soil-soil.rolling_friction\"]\nstep = {step}\n"
+    );
     let model_path = dir.join("model.toml");
     std::fs::write(&model_path, model).unwrap();
     let data = dir.join("data.csv");
@@ -25,32 +26,60 @@ fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
         "test,moisture_pct,observable,value,unit,uncertainty\nrepose,6,repose_angle_deg,35.53,deg,1.0\nrepose,12,repose_angle_deg,43.87,deg,1.0\n",
     )
     .unwrap();
-    let out = tilth(&[
+    (dir, model_path, data)
+}
+
+/// `tilth diagnose` of `model` against `data` into `out` at the coarse preset, free: the
+/// soil-soil rolling friction in 0..0.5, 2 replicates, with `extra` options.
+fn run_diagnose(
+    (model, data, out): (&Path, &Path, &Path),
+    candidates: &str,
+    extra: &[&str],
+) -> std::process::Output {
+    let mut args = vec![
         "diagnose",
         "--model",
-        model_path.to_str().unwrap(),
+        model.to_str().unwrap(),
         "--data",
         data.to_str().unwrap(),
         "--out",
-        dir.join("out").to_str().unwrap(),
+        out.to_str().unwrap(),
         "--param",
         "soil-soil.rolling_friction=0:0.5",
         "--candidates",
-        "more_rolling,capillary",
+        candidates,
         "--replicates",
         "2",
         "--coarse",
         "--cores",
         "2",
         "--quiet",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    tilth(&args)
+}
+
+/// The `diagnosis.json` in `out_dir` of a `diagnose` that must have succeeded.
+fn diagnosis(out: &std::process::Output, out_dir: &Path) -> serde_json::Value {
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("out/diagnosis.json")).unwrap()).unwrap();
+    serde_json::from_slice(&std::fs::read(out_dir.join("diagnosis.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
+    // A candidate that raises the free parameter by the same step as its finite difference
+    // (5 % of the range 0..0.5 = 0.025, exact in binary).
+    let (dir, model_path, data) = absorbed_case("diagnose-absorbed", "0.025");
+    let out = run_diagnose(
+        (&model_path, &data, &dir.join("out")),
+        "more_rolling,capillary",
+        &[],
+    );
+    let json = diagnosis(&out, &dir.join("out"));
     let cands = json["candidates"].as_array().unwrap();
     assert_eq!(cands.len(), 2);
     for c in cands {
@@ -113,44 +142,14 @@ fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
 /// very models of that difference and is absorbed, as at the default step above.
 #[test]
 fn param_step_sets_the_free_parameters_finite_difference() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("diagnose-param-step");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let mut model = std::fs::read_to_string(root.join("models/li2022.toml")).unwrap();
-    model +=
-        "\n[candidates.more_rolling]\nstrength = [\"soil-soil.rolling_friction\"]\nstep = 0.1\n";
-    let model_path = dir.join("model.toml");
-    std::fs::write(&model_path, model).unwrap();
-    let data = dir.join("data.csv");
-    std::fs::write(
-        &data,
-        "test,moisture_pct,observable,value,unit,uncertainty\nrepose,6,repose_angle_deg,35.53,deg,1.0\nrepose,12,repose_angle_deg,43.87,deg,1.0\n",
-    )
-    .unwrap();
+    let (dir, model_path, data) = absorbed_case("diagnose-param-step", "0.1");
     let out_dir = dir.join("out");
     let run = |step: &str| {
-        tilth(&[
-            "diagnose",
-            "--model",
-            model_path.to_str().unwrap(),
-            "--data",
-            data.to_str().unwrap(),
-            "--out",
-            out_dir.to_str().unwrap(),
-            "--param",
-            "soil-soil.rolling_friction=0:0.5",
-            "--param-step",
-            step,
-            "--candidates",
+        run_diagnose(
+            (&model_path, &data, &out_dir),
             "more_rolling",
-            "--replicates",
-            "2",
-            "--coarse",
-            "--cores",
-            "2",
-            "--quiet",
-        ])
+            &["--param-step", step],
+        )
     };
     // Refused before anything is written.
     for bad in ["0", "0.6", "NaN"] {
@@ -170,13 +169,7 @@ fn param_step_sets_the_free_parameters_finite_difference() {
         );
     }
     let out = run("0.2");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out_dir.join("diagnosis.json")).unwrap()).unwrap();
+    let json = diagnosis(&out, &out_dir);
     let more = &json["candidates"][0];
     assert_eq!(more["name"], "more_rolling", "{json}");
     assert_eq!(more["unidentified"], "absorbed", "{more}");
