@@ -443,9 +443,7 @@ fn report(
             format!(
                 "{} (slopes from finite differences of {} % of each range)",
                 free.join(", "),
-                format!("{:.3}", 100.0 * args.param_step)
-                    .trim_end_matches('0')
-                    .trim_end_matches('.')
+                crate::sweep::plan::num(100.0 * args.param_step)
             )
         },
         args.replicates,
