@@ -8,15 +8,23 @@
 #   tools/discovery/null_study.sh runs/null 20
 #
 # Environment: TILTH, MODEL, SCALE, LAB, R, NOISE, FREE as in hidden_effect.sh; CACHE (default
-# OUT/cache).
+# OUT/cache); SHIFT=PAIR.KEY=DELTA (optional) moves a parameter of the truth (`tilth synth
+# --shift`), so that the model is off where FREE can absorb it, with no effect hidden
+# (docs/discovery.md, "A free parameter off"):
+#
+#   SHIFT=soil-soil.rolling_friction=0.05 tools/discovery/null_study.sh runs/null-off 20
+#
+# PARAM_STEP (optional): diagnose's --param-step (default 0.05).
 set -euo pipefail
 out=$1 seeds=${2:-20}
 source "$(dirname "$0")/setup.sh"
+shift_truth=()
+[ -n "${SHIFT:-}" ] && shift_truth=(--shift "$SHIFT")
 for s in $(seq 1 "$seeds"); do
-  "$tilth" synth --truth "$model" --conditions "$out/conditions.csv" --noise "$NOISE" \
+  "$tilth" synth --truth "$model" "${shift_truth[@]}" --conditions "$out/conditions.csv" --noise "$NOISE" \
     --replicates "$R" --seed "$s" --out "$out/seed-$s/data.csv" $SCALE $LAB --quiet --cache "$cache"
   "$tilth" diagnose --model "$model" --data "$out/seed-$s/data.csv" --out "$out/seed-$s/diagnose" \
-    --param "$FREE" --replicates "$R" $SCALE $LAB --quiet --cache "$cache" > /dev/null
+    --param "$FREE" --replicates "$R" ${PARAM_STEP:+--param-step "$PARAM_STEP"} $SCALE $LAB --quiet --cache "$cache" > /dev/null
 done
 python3 - "$out" "$seeds" <<'PY'
 import json, sys

@@ -23,7 +23,7 @@ use super::measurements::{
 };
 use crate::lab::model::Model;
 use crate::sweep::execute;
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -51,6 +51,13 @@ pub struct SynthArgs {
     /// (`<name>.truth.toml`).
     #[arg(long = "with")]
     pub with: Vec<String>,
+    /// Move a parameter of the truth: PAIR.KEY=DELTA adds DELTA to every number of its value
+    /// (as `diagnose --param` and `fit` move it), repeatable. Data from a truth whose
+    /// calibrated parameter is off, with no effect hidden, test whether `diagnose` lets the
+    /// free parameters absorb the misfit or blames a candidate (docs/discovery.md, "A
+    /// free parameter off"). Written into the truth next to --out, as --with.
+    #[arg(long = "shift")]
+    pub shift: Vec<String>,
     /// Tests averaged per measurement, as a lab reports the mean of repeated tests: the value
     /// is the mean of this many truth runs (different seeds) plus the noise.
     #[arg(long, default_value_t = 1)]
@@ -124,9 +131,26 @@ pub fn parse_noise(spec: &str) -> Result<BTreeMap<String, Noise>> {
     Ok(out)
 }
 
-/// Writes the truth with the `--with` candidates switched on, next to `out`; returns its path.
-fn hide_effects(model: &Model, with: &[String], out: &Path) -> Result<PathBuf> {
+/// Writes the truth with the `--with` candidates switched on and the `--shift` parameters
+/// moved, next to `out`; returns its path.
+fn hide_effects(model: &Model, with: &[String], shift: &[String], out: &Path) -> Result<PathBuf> {
     let text = std::fs::read_to_string(&model.path)?;
+    let mut moved = vec![];
+    for w in shift {
+        let (path, v) = w
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--shift `{w}`: expected PAIR.KEY=DELTA"))?;
+        if path.trim().split_once('.').is_none() {
+            bail!("--shift `{w}`: expected PAIR.KEY=DELTA, e.g. soil-soil.rolling_friction=0.05");
+        }
+        let delta: f64 = v
+            .trim()
+            .parse()
+            .ok()
+            .filter(|x: &f64| x.is_finite())
+            .ok_or_else(|| anyhow!("--shift `{w}`: `{v}` is not a finite number"))?;
+        moved.push((path.trim().to_string(), delta));
+    }
     let mut on = vec![];
     for w in with {
         let (name, v) = w
@@ -155,6 +179,10 @@ fn hide_effects(model: &Model, with: &[String], out: &Path) -> Result<PathBuf> {
     let path = super::model_edit::variant(model, &text, dir, &name, |d| {
         for (n, s) in &on {
             super::model_edit::switch_on(d, model, n, *s)?;
+        }
+        for (path, delta) in &moved {
+            super::model_edit::add_to(d, path, *delta)
+                .with_context(|| format!("--shift {path}={delta}"))?;
         }
         Ok(())
     })?;
@@ -200,8 +228,8 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     let mut truth = std::path::absolute(&args.truth)?;
     let mut model = Model::load(&truth)?;
-    if !args.with.is_empty() {
-        truth = hide_effects(&model, &args.with, &args.out)?;
+    if !args.with.is_empty() || !args.shift.is_empty() {
+        truth = hide_effects(&model, &args.with, &args.shift, &args.out)?;
         model = Model::load(&truth)?;
     }
     let mut rows = read_conditions(&args.conditions)?;
@@ -251,12 +279,17 @@ pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
     )?;
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     let source = format!(
-        "synth: truth {}{}, seed {}, noise {}{}",
+        "synth: truth {}{}{}, seed {}, noise {}{}",
         args.truth.display(),
         if args.with.is_empty() {
             String::new()
         } else {
             format!(" with {}", args.with.join(" and "))
+        },
+        if args.shift.is_empty() {
+            String::new()
+        } else {
+            format!(" shifted {}", args.shift.join(" and "))
         },
         args.seed,
         args.noise,

@@ -376,3 +376,78 @@ fn synth_shares_runs_between_observables_and_averages_replicates() {
         "{err}"
     );
 }
+
+/// `--shift PAIR.KEY=DELTA` moves every number of the truth's parameter by DELTA (its
+/// interpolation points here), in the truth written next to the data; a shift of a key the
+/// laws do not take, or by no number, is refused before any run.
+#[test]
+fn synth_shifts_a_parameter_of_the_truth() {
+    let dir = scratch("synth-shift");
+    let cond = dir.join("conditions.csv");
+    std::fs::write(
+        &cond,
+        "test,moisture_pct,observable\nrepose,6,tray_mass_g\n",
+    )
+    .unwrap();
+    let synth = |shift: &str, out: &Path| {
+        tilth(&[
+            "synth",
+            "--truth",
+            "models/li2022.toml",
+            "--shift",
+            shift,
+            "--conditions",
+            cond.to_str().unwrap(),
+            "--noise",
+            "tray_mass_g=0.5",
+            "--out",
+            out.to_str().unwrap(),
+            "--work",
+            dir.join("runs").to_str().unwrap(),
+            "--coarse",
+            "--quiet",
+        ])
+    };
+    let rolling = |path: &Path| -> Vec<f64> {
+        let t: toml::Table = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        t["pairs"]["soil-soil"]["rolling_friction"]["y"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_float().unwrap())
+            .collect()
+    };
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/li2022.toml");
+    for (bad, expect) in [
+        (
+            "soil-soil.rolling_fricton=0.05",
+            "unknown key 'rolling_fricton'",
+        ),
+        (
+            "soil-soil.rolling_friction=much",
+            "`much` is not a finite number",
+        ),
+        ("rolling_friction=0.05", "expected PAIR.KEY=DELTA"),
+    ] {
+        let o = synth(bad, &dir.join("bad.csv"));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(expect), "{bad}: {err}");
+        assert!(
+            !dir.join("runs").exists(),
+            "{bad}: runs started before the check"
+        );
+    }
+    let out = dir.join("data.csv");
+    let o = synth("soil-soil.rolling_friction=0.05", &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (was, now) = (rolling(&model), rolling(&dir.join("data.truth.toml")));
+    assert_eq!(was.len(), now.len());
+    for (a, b) in was.iter().zip(&now) {
+        assert_eq!(*b, a + 0.05, "{was:?} shifted: {now:?}");
+    }
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("shifted soil-soil.rolling_friction=0.05"),
+        "{text}"
+    );
+}
