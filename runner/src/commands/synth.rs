@@ -137,33 +137,16 @@ fn hide_effects(model: &Model, with: &[String], shift: &[String], out: &Path) ->
     let text = std::fs::read_to_string(&model.path)?;
     let mut moved = vec![];
     for w in shift {
-        let (path, v) = w
-            .split_once('=')
-            .ok_or_else(|| anyhow!("--shift `{w}`: expected PAIR.KEY=DELTA"))?;
-        if path.trim().split_once('.').is_none() {
+        let (path, delta) = name_and_number("shift", w, "PAIR.KEY=DELTA")?;
+        if path.split_once('.').is_none() {
             bail!("--shift `{w}`: expected PAIR.KEY=DELTA, e.g. soil-soil.rolling_friction=0.05");
         }
-        let delta: f64 = v
-            .trim()
-            .parse()
-            .ok()
-            .filter(|x: &f64| x.is_finite())
-            .ok_or_else(|| anyhow!("--shift `{w}`: `{v}` is not a finite number"))?;
-        moved.push((path.trim().to_string(), delta));
+        moved.push((path.to_string(), delta));
     }
     let mut on = vec![];
     for w in with {
-        let (name, v) = w
-            .split_once('=')
-            .ok_or_else(|| anyhow!("--with `{w}`: expected NAME=STRENGTH"))?;
-        let name = name.trim();
+        let (name, s) = name_and_number("with", w, "NAME=STRENGTH")?;
         super::model_edit::has_candidate(model, name, &format!("--with `{w}`"))?;
-        let s: f64 = v
-            .trim()
-            .parse()
-            .ok()
-            .filter(|x: &f64| x.is_finite())
-            .ok_or_else(|| anyhow!("--with `{w}`: `{v}` is not a number"))?;
         on.push((name.to_string(), s));
     }
     let dir = out
@@ -187,6 +170,21 @@ fn hide_effects(model: &Model, with: &[String], shift: &[String], out: &Path) ->
         Ok(())
     })?;
     Ok(std::path::absolute(path)?)
+}
+
+/// The name and the finite number of `w`, the value `NAME=NUMBER` of `--option` (`form`:
+/// the shape expected, for the message).
+fn name_and_number<'a>(option: &str, w: &'a str, form: &str) -> Result<(&'a str, f64)> {
+    let (name, v) = w
+        .split_once('=')
+        .ok_or_else(|| anyhow!("--{option} `{w}`: expected {form}"))?;
+    let x: f64 = v
+        .trim()
+        .parse()
+        .ok()
+        .filter(|x: &f64| x.is_finite())
+        .ok_or_else(|| anyhow!("--{option} `{w}`: `{v}` is not a finite number"))?;
+    Ok((name.trim(), x))
 }
 
 /// Reads the conditions file: rows of `test` and its conditions.

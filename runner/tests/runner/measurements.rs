@@ -12,6 +12,14 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// `tilth synth --truth models/li2022.toml ARGS --coarse --quiet`.
+fn synth_li2022(args: &[&str]) -> std::process::Output {
+    let mut all = vec!["synth", "--truth", "models/li2022.toml"];
+    all.extend(args);
+    all.extend(["--coarse", "--quiet"]);
+    tilth(&all)
+}
+
 const HEAD: &str = "test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,value,unit,uncertainty,replicates,source";
 
 /// `compare` on a data file with one bad row: fails, names the file, row and column and
@@ -126,10 +134,7 @@ fn synth_writes_what_the_truth_simulates_and_compare_reads_it() {
     let cond = dir.join("conditions.csv");
     std::fs::write(&cond, "test,moisture_pct\nrepose,6\nrepose,12\n").unwrap();
     let synth = |out: &Path, noise: &str| {
-        let o = tilth(&[
-            "synth",
-            "--truth",
-            "models/li2022.toml",
+        let o = synth_li2022(&[
             "--conditions",
             cond.to_str().unwrap(),
             "--noise",
@@ -140,8 +145,6 @@ fn synth_writes_what_the_truth_simulates_and_compare_reads_it() {
             out.to_str().unwrap(),
             "--work",
             dir.join("runs").to_str().unwrap(),
-            "--coarse",
-            "--quiet",
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         std::fs::read_to_string(out).unwrap()
@@ -293,10 +296,7 @@ fn synth_shares_runs_between_observables_and_averages_replicates() {
     )
     .unwrap();
     let out = dir.join("data.csv");
-    let o = tilth(&[
-        "synth",
-        "--truth",
-        "models/li2022.toml",
+    let o = synth_li2022(&[
         "--conditions",
         cond.to_str().unwrap(),
         "--noise",
@@ -309,8 +309,6 @@ fn synth_shares_runs_between_observables_and_averages_replicates() {
         out.to_str().unwrap(),
         "--work",
         dir.join("runs").to_str().unwrap(),
-        "--coarse",
-        "--quiet",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let runs: Vec<serde_json::Value> = (1..=3)
@@ -356,18 +354,13 @@ fn synth_shares_runs_between_observables_and_averages_replicates() {
     }
     // A reading the test does not give is refused, naming the ones it does.
     std::fs::write(&cond, "test,moisture_pct,observable\nrepose,6,ucs_kpa\n").unwrap();
-    let o = tilth(&[
-        "synth",
-        "--truth",
-        "models/li2022.toml",
+    let o = synth_li2022(&[
         "--conditions",
         cond.to_str().unwrap(),
         "--noise",
         "ucs_kpa=1",
         "--out",
         out.to_str().unwrap(),
-        "--coarse",
-        "--quiet",
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
@@ -390,10 +383,7 @@ fn synth_shifts_a_parameter_of_the_truth() {
     )
     .unwrap();
     let synth = |shift: &str, out: &Path| {
-        tilth(&[
-            "synth",
-            "--truth",
-            "models/li2022.toml",
+        synth_li2022(&[
             "--shift",
             shift,
             "--conditions",
@@ -404,8 +394,6 @@ fn synth_shifts_a_parameter_of_the_truth() {
             out.to_str().unwrap(),
             "--work",
             dir.join("runs").to_str().unwrap(),
-            "--coarse",
-            "--quiet",
         ])
     };
     let rolling = |path: &Path| -> Vec<f64> {
