@@ -1,6 +1,6 @@
 //! Bulk materials and the effective (pair) quantities of Hertz-Mindlin contact.
 //!
-//! physics.md, "Effective quantities":
+//! docs/physics.md, "Effective quantities":
 //! - 1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j
 //! - 1/G* = 2(2 - nu_i)(1 + nu_i)/E_i + 2(2 - nu_j)(1 + nu_j)/E_j
 

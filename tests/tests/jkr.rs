@@ -1,4 +1,4 @@
-//! JKR against physics.md: the force-overlap curve, the pull-off force, attraction down to the
+//! JKR against docs/physics.md: the force-overlap curve, the pull-off force, attraction down to the
 //! critical negative overlap and no attraction before first contact.
 
 mod common;

@@ -1,4 +1,4 @@
-//! `repose`: the funnel repose-angle test (FT-104B tester; experiments.md).
+//! `repose`: the funnel repose-angle test (FT-104B tester; docs/experiments.md).
 //!
 //! A steel funnel (inlet 135 mm, outlet 20 mm, 140 mm high) stands coaxially above a steel
 //! tray (a ring knife of 61.8 mm diameter and 20 mm height) on a steel floor, or on a stand

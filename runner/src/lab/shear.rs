@@ -1,4 +1,4 @@
-//! `direct_shear`: the strain-controlled direct shear test (experiments.md).
+//! `direct_shear`: the strain-controlled direct shear test (docs/experiments.md).
 //!
 //! A steel split box: a lower ring (fixed, with a bottom) and an upper ring of the specimen's
 //! diameter (61.8 mm; area 3000 mm^2), each with a flange at the shear plane. Particles fill it loosely and settle; a platen

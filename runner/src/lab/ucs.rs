@@ -1,4 +1,4 @@
-//! `ucs`: the unconfined compression test (experiments.md).
+//! `ucs`: the unconfined compression test (docs/experiments.md).
 //!
 //! A steel mould (61.8 mm inner diameter) on a steel base is filled loosely; the particles
 //! settle, a platen compacts them with `compaction_force`, bonds form, the mould is removed

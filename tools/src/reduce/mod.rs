@@ -15,7 +15,7 @@
 //!
 //! What the runner writes and which channels each experiment adds: runner/MCAP.md and the
 //! channel contract in each reducer's documentation. The reference study and its tests:
-//! shared/docs/experiments.md (Li et al. 2022).
+//! docs/experiments.md (Li et al. 2022).
 //!
 //! One concern per file: reading the file, the point-cloud layout, scalar series, the
 //! least-squares line, the silhouette, the cone fit, one file per test, one per picture.

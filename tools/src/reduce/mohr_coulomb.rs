@@ -1,5 +1,5 @@
 //! Mohr-Coulomb failure line through the peak shear stresses of direct shear runs at
-//! several normal pressures (Li et al. 2022, table 2; shared/docs/experiments.md).
+//! several normal pressures (Li et al. 2022, table 2; docs/experiments.md).
 //!
 //! ```text
 //! tau_f = c + sigma_n tan(phi)

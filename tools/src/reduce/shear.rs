@@ -1,4 +1,4 @@
-//! Peak shear force of a direct shear run (Li et al. 2022; shared/docs/experiments.md,
+//! Peak shear force of a direct shear run (Li et al. 2022; docs/experiments.md,
 //! "Direct shear").
 //!
 //! The lower box is fixed and the upper box is pulled; `/scalars/shear_force` is the force of

@@ -1,4 +1,4 @@
-//! Unconfined compressive strength (Li et al. 2022; shared/docs/experiments.md,
+//! Unconfined compressive strength (Li et al. 2022; docs/experiments.md,
 //! "Unconfined compression"; the rule is that of ASTM D2166).
 //!
 //! A cylinder of initial diameter d is compressed without lateral support. As it shortens it

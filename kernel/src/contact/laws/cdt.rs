@@ -2,7 +2,7 @@
 //!
 //! tau_i = -mu_r L d_i omega_i/|omega_i|  (N m), with L the Coulomb load (N) and d_i the distance
 //! from i's centre to the contact point (m); the same for j with its own spin. EDEM uses each
-//! particle's own angular velocity (LIGGGHTS `cdt` uses the relative one and R*; see physics.md).
+//! particle's own angular velocity (LIGGGHTS `cdt` uses the relative one and R*; see docs/physics.md).
 //! No torque on a particle that does not spin. It chatters at rest: the torque does not vanish
 //! as omega -> 0, so a pile may never settle; prefer `epsd` for heaps.
 //!

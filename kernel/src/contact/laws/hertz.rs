@@ -1,7 +1,7 @@
 //! `hertz`: Hertz elastic normal force between spheres.
 //!
 //! F_n = 4/3 E* sqrt(R*) delta_n^(3/2)  (N), normal stiffness S_n = dF_n/d(delta_n) = 2 E* sqrt(R* delta_n) (N/m),
-//! contact radius a = sqrt(R* delta_n). E* and R* as in physics.md; no force at delta_n <= 0.
+//! contact radius a = sqrt(R* delta_n). E* and R* as in docs/physics.md; no force at delta_n <= 0.
 //!
 //! Reference: H. Hertz (1882); EDEM "Hertz-Mindlin (no slip)"; LIGGGHTS `hertz`; LAMMPS `hertz/material`.
 //!

@@ -7,7 +7,7 @@
 //! The contact forms on touching and keeps pulling at negative overlap down to
 //!   delta_c = a_c^2/R* - sqrt(4 pi gamma a_c / E*),  a_c = [9 pi gamma R*^2 / (2 E*) (3/4 - 1/sqrt(2))]^(1/3),
 //! where it breaks. The least force on the curve is F_min = -3 pi gamma R* (so gamma here is half
-//! the work of adhesion; EDEM's page prints 3/2 pi gamma R*, see physics.md). Friction is loaded
+//! the work of adhesion; EDEM's page prints 3/2 pi gamma R*, see docs/physics.md). Friction is loaded
 //! by the repulsive Hertz part 4 E* a^3 / (3 R*), the normal stiffness is S_n = 2 E* a.
 //!
 //! a is found on the stable branch by Newton's method on s = sqrt(a):
