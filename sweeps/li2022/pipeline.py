@@ -21,7 +21,7 @@ per moisture on a funnel heap that scatters by 1-3 degrees between seeds instead
 every setting, then fresh seeds through `tilth compare` as the verdict -> the moistures that
 verdict missed, refined and validated on fresh seeds again (stage `repose-refinement`) -> the bonded specimens: the direct shear box and the unconfined compression test at every
 condition of tables 12 and 13, with the bond strengths of a calibrated model file (`--bonds`,
-by default docs/li2022-statistics/per-test-bonds.toml, whose calibration that document
+by default models/li2022-per-test-bonds.toml, whose calibration that document
 describes), against the measurements and beside the study's own simulated values.
 
 Everything is written under OUT: each sweep's runs and results.csv, every command's output,
@@ -64,9 +64,9 @@ QUIET_FUNNEL = [
 # The repose stages' starting model: the quiet heap's model with Marshall twisting resistance
 # at the sliding friction (no new free parameter). Calibrated and refined from it, the angle is
 # within 2 % of table 1 at all four moistures; from the model without twisting
-# (docs/li2022-repose-calibration/model.toml, range 0.1:0.6) the 12 % heap stays near 43
+# (models/li2022-repose.toml, range 0.1:0.6) the 12 % heap stays near 43
 # degrees (docs/li2022-repose-calibration.md).
-REPOSE_MODEL = REPO / "docs" / "li2022-repose-calibration" / "twisting" / "model.toml"
+REPOSE_MODEL = REPO / "models" / "li2022-repose-twisting.toml"
 # The free parameter, one value per moisture (the surface energy is fixed on a line in
 # moisture by the starting model: one angle per moisture cannot separate the two). With
 # twisting resistance the dry heap needs less rolling friction, hence the range's low end.
@@ -84,7 +84,7 @@ REFINEMENT_FIRST_SEED = 3001
 # its range (where the 12 % heap scattered by 1.2 degrees between seeds, against 2-2.8 at 0.6).
 REFINE_COHESION = "soil-soil.surface_energy=0.1:0.25"
 # The study's error bands (its worst errors, section "What the study calibrated" of
-# shared/docs/experiments.md): peak shear force 3.71-6.53 %, UCS 0.6-8.07 %.
+# docs/experiments.md): peak shear force 3.71-6.53 %, UCS 0.6-8.07 %.
 BOND_TABLES = [
     # (test, observable, study table, its CSV, measured column, simulated column, band %)
     ("direct_shear", "peak_shear_force_n", 12, "table12_shear_peak_force.csv",
@@ -715,7 +715,7 @@ def main():
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--replicates", type=int, default=10,
                     help="seeds per moisture in the validation runs")
-    ap.add_argument("--bonds", default=str(REPO / "docs" / "li2022-statistics" / "per-test-bonds.toml"),
+    ap.add_argument("--bonds", default=str(REPO / "models" / "li2022-per-test-bonds.toml"),
                     help="model file with calibrated bond strengths for tables 12 and 13")
     ap.add_argument("--bond-replicates", type=int, default=3,
                     help="specimens (seeds) per condition of tables 12 and 13")
@@ -723,7 +723,7 @@ def main():
                     help="comma-separated, of: " + ", ".join(STAGES) + " (default: all, in this order)")
     ap.add_argument("--repose-model", default=str(REPOSE_MODEL),
                     help="starting model of the repose-calibration stage (default: the twisting model; "
-                         "docs/li2022-repose-calibration/model.toml is the one without twisting, "
+                         "models/li2022-repose.toml is the one without twisting, "
                          "calibrated with soil-soil.rolling_friction=0.1:0.6)")
     ap.add_argument("--repose-param", default=REPOSE_PARAM,
                     help="free parameter and range of the repose-calibration and -refinement stages, PAIR.KEY=LO:HI "

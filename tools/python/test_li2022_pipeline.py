@@ -21,6 +21,7 @@ import unittest
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
 DATA = REPO / "sweeps" / "li2022" / "data"
 
 
@@ -97,7 +98,7 @@ def stand_in(case, cores, replicates, fake):
 class BondStage(unittest.TestCase):
     def setUp(self):
         stand_in(self, 1, 1, lambda argv: fake_compare(self.out))
-        self.summary = self.pipe.bonds(REPO / "docs" / "li2022-statistics" / "per-test-bonds.toml", 3)
+        self.summary = self.pipe.bonds(REPO / "models" / "li2022-per-test-bonds.toml", 3)
         self.report = "\n".join(self.pipe.report)
 
     def tearDown(self):
@@ -207,7 +208,7 @@ class ReposeCalibrationStage(unittest.TestCase):
                 fake_angle_compare(self.out, 8)
 
         stand_in(self, 2, 8, fake)
-        self.line = self.pipe.calibrate_repose(REPO / "docs" / "li2022-repose-calibration" / "model.toml", 2, 10)
+        self.line = self.pipe.calibrate_repose(REPO / "models" / "li2022-repose.toml", 2, 10)
         self.report = "\n".join(self.pipe.report)
 
     def tearDown(self):
@@ -259,7 +260,7 @@ class ReposeCalibrationStage(unittest.TestCase):
 
     def test_the_study_column_reproduces_the_errors_of_its_table_11(self):
         rows = self.rows()
-        # The study's validation errors (shared/docs/experiments.md): 0.7, 0.8, 0.7, 4.72 %.
+        # The study's validation errors (docs/experiments.md): 0.7, 0.8, 0.7, 4.72 %.
         printed = {m: float(re.search(r"\(([-+][0-9.]+) %\)", rows[m][2]).group(1)) for m in rows}
         self.assertAlmostEqual(abs(printed[12]), 4.72, delta=0.01)
         for m in (3, 6, 9):
@@ -275,12 +276,12 @@ class ReposeCalibrationStage(unittest.TestCase):
         self.pipe.report.clear()
         param = "soil-soil.rolling_friction=0.05:0.6"
         self.pipe.repose_param = param
-        self.pipe.calibrate_repose(REPO / "docs" / "li2022-repose-calibration" / "twisting" / "model.toml",
+        self.pipe.calibrate_repose(REPO / "models" / "li2022-repose-twisting.toml",
                                    2, 10)
         cal = self.calls[0]
         self.assertEqual(cal[0], "calibrate")
         self.assertEqual(cal[cal.index("--param") + 1], param)
-        self.assertTrue(cal[cal.index("--model") + 1].endswith("twisting/model.toml"))
+        self.assertTrue(cal[cal.index("--model") + 1].endswith("li2022-repose-twisting.toml"))
         self.assertIn(f"the free parameter `{param}`", "\n".join(self.pipe.report))
 
 
@@ -309,7 +310,7 @@ def fake_refinement_inputs(out: Path):
     (out / "repose-calibration").mkdir(parents=True, exist_ok=True)
     (out / "repose-calibration" / "calibration.json").write_text(json.dumps({"conditions": conditions}))
     (out / "repose-calibration" / "model.toml").write_text(
-        (REPO / "docs" / "li2022-repose-calibration" / "calibrated-model.toml").read_text())
+        (HERE / "fixtures" / "repose-calibrated-model.toml").read_text())
     rows = []
     for m, e in REFINE_BEFORE.items():
         mean = REFINE_ANGLES[m] * (1 + e)
