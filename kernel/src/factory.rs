@@ -264,7 +264,7 @@ impl Factory {
 /// cell's last sphere, each sphere's predecessor in its cell, the spheres), as LAMMPS bins
 /// atoms: a vector per cell was one small allocation per occupied cell, about 100,000 for
 /// the settling bench's bed, and glibc kept their ~10 MB resident long after the grid was
-/// dropped (BENCHMARKS.md, tenth sitting).
+/// dropped.
 struct LocalGrid {
     lo: DVec3,
     cell: f64,

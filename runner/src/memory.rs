@@ -6,7 +6,8 @@
 //! grow a little at each rebuild, so their freed generations piled up: at 100,000 particles
 //! the peak resident memory was 1.14 KiB per particle with 0.75 KiB live. With a fixed
 //! threshold every block from 256 KiB up is its own mapping, returned to the system when
-//! freed, and the peak fell to 0.86 KiB per particle (BENCHMARKS.md, "Memory").
+//! freed, and the peak fell to 0.86 KiB per particle (today's numbers: BENCHMARKS.md, "Memory at
+//! 100,000 particles").
 
 /// Serves blocks of 256 KiB and more from their own mappings (glibc `M_MMAP_THRESHOLD`). A
 /// user's `MALLOC_MMAP_THRESHOLD_` in the environment wins. Elsewhere, nothing to do.

@@ -3,7 +3,7 @@
 //!
 //! Hertz contacts, no cohesion. With JKR cohesion added (0.36 J/m^2), a poured heap does not
 //! settle: a grain held by a single adhesive contact keeps swinging at a few cm/s, with the
-//! total-form and with the incremental Mindlin spring alike (2026-11-27). Part of it is a
+//! total-form and with the incremental Mindlin spring alike. Part of it is a
 //! spin that no law of such a model opposes: EPSD leaves out the spin about the contact
 //! normal, and without the `twisting` law two cohesive grains on one floor contact turn for
 //! ever (tests/tests/twisting.rs). What the funnel test does about such grains:

@@ -137,7 +137,7 @@ fn head_on_particle_wall_trajectories_match_lammps() {
 /// contact point at R - delta/2 (pairs) and R - delta (walls) for both the torque arm and the
 /// contact-point velocity; LAMMPS 2021 uses the full radius R for the velocity. The overlap
 /// peaks at about 2 % of R here, so the two codes may differ by that order, and no more.
-/// Measured 2026-11-21: with the velocity arm switched to R (a one-line experiment in
+/// Measured: with the velocity arm switched to R (a one-line experiment in
 /// contact/geometry.rs), tilth reproduced all six LAMMPS oblique numbers to 12 digits, so the
 /// convention is the only difference. In the pair case the normal turns as the spheres slide
 /// past each other, so the tangential difference leaks into the normal rebound (1e-4).

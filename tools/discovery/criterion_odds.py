@@ -12,8 +12,7 @@ over a study's rows at significance A (default 0.001), with the runs' scatters s
 `compare` estimates them (docs/discovery.md, "The refit judged by the data's chi^2").
 `--test-bar` gives instead the odds that a fit that found the truth misses the CI test's own
 bar (1.5x the larger of the data's noise and the truth's own RMSE) with R_J runs per condition
-in the judging compares (docs/discovery.md, "How often a fit that found the truth meets the
-test's bar").
+in the judging compares.
 
 STUDY is a hidden-effect study's OUT run with TRUTH=1 (tools/discovery/hidden_effect.sh): its
 `data.csv` and its truth's compare `5-truth/compare.json`. NOISE is the injected noise the data

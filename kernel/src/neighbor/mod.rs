@@ -15,7 +15,7 @@ pub(crate) use wall_list::{WallContacts, build_wall_contacts};
 /// work split (and every sum) is the same on any number of threads. Small enough that the
 /// last task of a phase is short (at 20,000 particles, 157 tasks of a few microseconds); the
 /// settling bed's 2-thread speed was the same at 128 and 256 and lower at 64 and 512
-/// (BENCHMARKS.md, ninth sitting).
+/// (measured with `tilth bench settling-bed --threads 2`).
 pub const CHUNK: usize = 128;
 
 /// The most chunks one task of a parallel loop takes (rayon's `with_max_len`): one when

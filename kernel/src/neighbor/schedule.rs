@@ -16,8 +16,8 @@
 //! Kokkos-based DEM and MD codes that colour their work to avoid atomics). It replaced
 //! partial sums of their own per block, summed per particle afterwards: in cell order the
 //! blocks touch about twice the particles, so the particle phase read and zeroed 192 bytes
-//! a particle every step (BENCHMARKS.md, thirty-fifth sitting); and before them, per-pair
-//! force records summed in a separate pass, 72 bytes per listed pair (seventeenth sitting).
+//! a particle every step; and before them, per-pair
+//! force records summed in a separate pass, 72 bytes per listed pair.
 
 use super::{CHUNK, chunks_per_task};
 use crate::contact::model::ACTIVE;
@@ -36,7 +36,7 @@ pub const MAX_BLOCKS: usize = 16;
 /// Extra work of an established contact, in listed pairs: it runs the laws, where a listed
 /// pair out of contact is a distance test. Without it, blocks of equal pairs took unequal
 /// time and two threads sped the pair phase up 1.65x; with it 1.80x (4 and 12 gave the
-/// same; BENCHMARKS.md, seventeenth sitting).
+/// same).
 pub const CONTACT_WEIGHT: usize = 4;
 
 /// A block of rows and the particles its pairs touch.

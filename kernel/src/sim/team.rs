@@ -4,8 +4,8 @@
 //! each at 20,000 particles. Rayon's idle worker sleeps in the kernel after a few dozen
 //! rounds without work, and its waiting thread sleeps at the end of a join; on a virtual
 //! machine each wake-up is a futex call and an interrupt to a halted CPU. `strace` of a
-//! two-thread run found 3,293 futex calls and 100,377 `sched_yield`s in 5,000 steps
-//! (BENCHMARKS.md, nineteenth sitting). OpenMP runtimes avoid that with an active wait:
+//! two-thread run found 3,293 futex calls and 100,377 `sched_yield`s in 5,000 steps.
+//! OpenMP runtimes avoid that with an active wait:
 //! the team's threads spin between regions. [`Team`] is that, for the run loop only: the
 //! leader (the thread that runs the steps) posts each phase's work, each helper that comes
 //! in time takes items of it (see [`Team::map`]), and between phases the helpers poll for

@@ -298,7 +298,7 @@ pub struct Simulate<'a> {
 /// The seed of replicate `base` (`first_seed + r`) at one condition, in [1, 2^31).
 ///
 /// Derived from both, so that runs at different conditions are independent draws, as
-/// specimens in a laboratory are. With one seed for every condition (before 2026-11-26),
+/// specimens in a laboratory are. With one seed for every condition,
 /// a draw that shapes the outcome at every condition alike (a fine fraction's realised
 /// share of fines, which sets the funnel's flow rate at every moisture) moved the means of
 /// all conditions together: with R runs per condition the rows' simulation errors were

@@ -41,7 +41,7 @@ const SURELY_TOUCHING: f64 = 1.0 - 1e-15;
 thread_local! {
     /// Each thread's list of a block's candidate pairs, kept from block to block: a block's
     /// is too large for the allocator's per-thread cache, and two threads allocating it at
-    /// once would wait on its lock (BENCHMARKS.md, twentieth sitting).
+    /// once would wait on its lock.
     static CANDIDATES: std::cell::Cell<Vec<u32>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
@@ -289,7 +289,7 @@ impl Ctx<'_> {
         assert!(at.iter().all(|&a| a + stride <= history.len()));
         // Component by component over the lanes, which the compiler turns into vector
         // gathers: a few per cent off the pair phase against loading lane by lane into the
-        // batch (2-12 % by the measure; BENCHMARKS.md, twenty-fifth sitting).
+        // batch (2-12 % by the measure).
         // SAFETY (both macros): every index was checked against its slice's length above
         // (a slice of `DVec3` viewed as `f64` holds three per particle).
         macro_rules! scalar {

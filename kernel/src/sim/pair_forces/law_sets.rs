@@ -6,7 +6,7 @@
 //! model runs them through the slots' enums (`LaneLaws` for `ContactModel`), the same
 //! pipeline compiled once for every law. Both give the same bits (the same lane forms, in the
 //! same order); a set here only makes it faster: 15-18 % off the settling bed's pair phase
-//! on AVX2 (BENCHMARKS.md, thirty-third sitting). A new law needs no line here; a law set in
+//! on AVX2. A new law needs no line here; a law set in
 //! common use may get one.
 //!
 //! An empty slot in a model matches any law of a set's slot, and a model without extras

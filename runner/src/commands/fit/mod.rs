@@ -204,10 +204,10 @@ pub struct Step {
 ///
 /// Not less: the grains' chaos decorrelates the runs of one seed after any change, so each
 /// slope carries noise of variance 2 s^2 / (R h^2), s the runs' scatter. At 5 % of the range
-/// (until 2026-11-30) that noise was larger than the slopes themselves on the discovery
-/// proof's draws, so J'J was mostly noise: steps came out short, the estimates stayed near
-/// their start, and the standard errors were 2-6x too small (docs/discovery.md, "`fit`'s
-/// standard errors were too small"). A simulation of this fit on a model of two parameters
+/// that noise was larger than the slopes themselves on the discovery proof's draws, so J'J
+/// was mostly noise: steps came out short, the estimates stayed near their start, and the
+/// standard errors were 2-6x too small (docs/discovery.md, "`fit`'s standard errors"). A
+/// simulation of this fit on a model of two parameters
 /// whose truth is known (`tools/discovery/fit_steps.py`, 400 draws each): with 5 % steps
 /// the estimates fall short of the truth by up to 1.6 of their exact standard deviations
 /// and the 95 % interval holds it in 5-77 % of the draws; with 25 %, the bias is under 0.25

@@ -19,7 +19,7 @@
 //! follows the runs' scatter, and it costs 1 + P settings of DEM runs.
 //!
 //! Each test alone stops too soon (docs/discovery.md, "The stop rule and the seeds"):
-//! - chi^2 <= dof alone (the rule until 2026-11-26) tests the whole residual vector, so a
+//! - chi^2 <= dof alone tests the whole residual vector, so a
 //!   miss all rows share along one parameter can hide among the rows' noise: 30 rows each
 //!   0.9 standard errors off give chi^2 = 24.3 on 29 degrees of freedom, and a step would
 //!   remove all of it (a test below). On the seven-level plastic-adhesion study it stopped
