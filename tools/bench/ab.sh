@@ -8,7 +8,7 @@
 set -euo pipefail
 old=$1 new=$2
 N=${N:-20000}; S=${S:-20000}; ROUNDS=${ROUNDS:-2}; COHESION=${COHESION:-sjkr}
-DECK=${DECK:-$(cd "$(dirname "$0")/../../../shared/benchmarks/settling-bed" 2>/dev/null && pwd || true)}
+DECK=${DECK:-$(cd "$(dirname "$0")/settling-bed" && pwd)}
 echo "settling bed A/B: $N particles, $S steps, --cohesion $COHESION, $(date -u +%H:%M:%S) UTC"
 for round in $(seq "$ROUNDS"); do
   for t in 1 2; do

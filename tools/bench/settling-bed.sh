@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The settling-bed speed benchmark (../shared/benchmarks/settling-bed/README.md), run in tilth,
+# The settling-bed speed benchmark (tools/bench/settling-bed/README.md), run in tilth,
 # LIGGGHTS and LAMMPS in one sitting on this machine; prints particle-steps/s and the ratios
 # that BENCHMARKS.md records. Peers: apt-get install -y liggghts lammps (not needed by CI).
 # Each peer is compared with tilth running its deck's cohesion: LIGGGHTS's simplified JKR
@@ -13,12 +13,12 @@ cd "$(dirname "$0")/../.."
 N=${N:-20000}
 S=${S:-20000}
 # Rounds of the four tilth runs and the two peers, alternating; the ratios use each run's
-# median. Two-thread speed on this VM depends on how the host schedules its two virtual
-# CPUs (BENCHMARKS.md, fifteenth sitting), and the whole machine's speed drifts by up to a
-# quarter within a sitting (twenty-third), so a single round can land anywhere in that
-# spread; the peers run in every round so that a slow spell slows both sides.
+# median. Two-thread speed on a VM depends on how the host schedules its two virtual CPUs,
+# and the whole machine's speed drifts by up to a quarter within an hour, so a single round
+# can land anywhere in that spread; the peers run in every round so that a slow spell slows
+# both sides.
 ROUNDS=${ROUNDS:-1}
-DECK=${DECK:-$(cd ../shared/benchmarks/settling-bed && pwd)}
+DECK=${DECK:-$PWD/tools/bench/settling-bed}
 cargo build --release -q -p tilth
 TILTH=$PWD/target/release/tilth
 work=$(mktemp -d)

@@ -1,5 +1,5 @@
 //! `tilth bench settling-bed`: the kernel's speed benchmark
-//! (../shared/benchmarks/settling-bed/README.md), built in code.
+//! (tools/bench/settling-bed/README.md), built in code.
 //!
 //! A box of four planes (x, y in [-0.03, 0.03] m) on a floor z = 0; N spheres of 2 mm, density
 //! 1380, placed at random without overlap in x, y in [-0.028, 0.028], z in [0.002, 0.118] with
