@@ -147,8 +147,7 @@ pub struct Simulation {
     /// `None` when they are not ready (new particles, a new order). The pair phase adds to
     /// these, then they change places with `particles.force` and `torque`: the particle
     /// phase reads the complete sums there and readies the old rows here for the next step,
-    /// in the same pass (it once summed each block's partial sums, twice the rows:
-    /// BENCHMARKS.md, thirty-fifth sitting).
+    /// in the same pass (it once summed each block's partial sums, twice the rows).
     next_force: Vec<DVec3>,
     next_torque: Vec<DVec3>,
     next_ready: Option<DVec3>,
@@ -593,8 +592,7 @@ impl Simulation {
         // the usual skins (up to half a radius) spans one layer of cells, not two: in cells
         // of one diameter a partner could lie two layers away in index, and each block of
         // the pair schedule reached twice as far beyond its rows (settled bed: 2.1 partial
-        // sums a particle in cells of 2 r, 1.8 in cells of 2.5 r; BENCHMARKS.md,
-        // twenty-eighth sitting).
+        // sums a particle in cells of 2 r, 1.8 in cells of 2.5 r).
         let grid = crate::neighbor::CellGrid::build(&p.position, 2.5 * r_max);
         let order = grid.cell_order().to_vec();
         self.particles.permute(&order);
@@ -619,7 +617,7 @@ impl Simulation {
         let keep = |h: &[f64]| model.bond_intact(h);
         let (new_walls, schedule) = self.pool.install(|| {
             // Intact bonds keep their pairs in the list, however far they stretch.
-            let keep: Option<&(dyn Fn(&[f64]) -> bool + Sync)> = bonded.then_some(&keep);
+            let keep: Option<crate::neighbor::pairs::PairFilter<'_>> = bonded.then_some(&keep);
             pairs.rebuild_keeping(&p.position, &p.radius, &p.id, extra, order.as_deref(), keep);
             let walls = build_wall_contacts(p, walls, old, extra, stride, order.as_deref());
             let schedule =
@@ -784,8 +782,7 @@ impl Simulation {
             outs.resize(mine.force.len(), WallOut::NONE);
             if !outs.is_empty() {
                 // Room for a particle's usual wall hits: growing it took glibc's arena lock
-                // (`realloc` bypasses the per-thread cache) on both threads at once
-                // (BENCHMARKS.md, twentieth sitting).
+                // (`realloc` bypasses the per-thread cache) on both threads at once.
                 let mut hits: Vec<(f64, usize, Hit)> = Vec::with_capacity(8);
                 let bodies = ChunkBodies {
                     first: c * CHUNK,
@@ -880,7 +877,7 @@ impl Simulation {
         };
 
         // Wall totals: the chunks' shares, in chunk order. Summing every contact here, one
-        // thread did what the chunks now do on all (BENCHMARKS.md, twenty-third sitting).
+        // thread did what the chunks now do on all.
         for w in &mut self.walls {
             w.force = DVec3::ZERO;
             w.torque = DVec3::ZERO;
@@ -963,9 +960,9 @@ impl Simulation {
     /// the current state and returns the seconds they took. The contact history is put back
     /// before each (untimed), so every repetition does the same work as this step's pair
     /// phase; nothing else changes. Full runs vary by 5-10 % on a shared VM, these by about
-    /// 2 % (BENCHMARKS.md, twenty-first sitting). On more than one thread the phase runs on
+    /// 2 %. On more than one thread the phase runs on
     /// the team a run keeps awake, as in [`Simulation::run`]; on rayon alone it scaled
-    /// 1.32x from one thread to two where runs scale 1.65-1.85x (fortieth sitting).
+    /// 1.32x from one thread to two where runs scale 1.65-1.85x.
     pub fn time_pair_phase(&mut self, reps: usize) -> f64 {
         let saved = self.pairs.history.clone();
         // One entry into the pool: entering it per repetition would time a thread handoff.
@@ -1021,8 +1018,8 @@ impl Simulation {
         // Bonds are evaluated one at a time: once bonds are formed, a model runs its whole
         // pair phase so. Before (a bonded sample's filling and compaction; a model whose bond
         // law never forms a bond, as in a repose test) no pair holds a bond, and the lanes
-        // give the bits of the scalar pipeline. (A lane form of the bond law, tried, was
-        // 11 % slower on the UCS test: BENCHMARKS.md, thirtieth sitting.)
+        // give the bits of the scalar pipeline. (A lane form of the bond law was
+        // 11 % slower on the UCS test.)
         let path = if self.bonded {
             PairPath::OneByOne
         } else {
@@ -1283,9 +1280,8 @@ fn plausible(x: DVec3, v: DVec3, w: DVec3, limit2: f64, dom: Aabb) -> bool {
 // The cheap test in two halves, each made where what it tests changes: the position in the
 // drift, while it is in registers; the velocities in the particle phase, after its kick.
 // Written with `&`, not `&&`: no branch per particle. The exact test on each particle took
-// about a fifth of the particle phase in a dilute flow; the cheap one about half as much
-// (BENCHMARKS.md, fourteenth sitting), and loading each position again for it was most of
-// what was left (sixteenth sitting).
+// about a fifth of the particle phase in a dilute flow; the cheap one about half as much,
+// and loading each position again for it was most of what was left.
 
 /// The velocity half of the cheap test.
 #[inline(always)]

@@ -2,7 +2,7 @@
 //!
 //! Rayleigh time T_R = pi R sqrt(rho / G) / (0.1631 nu + 0.8766)  (s), the period of a
 //! Rayleigh surface wave crossing a particle; EDEM practice is dt = 0.2-0.4 T_R.
-//! Reference: physics.md; Li, Xu, Thornton (2005) Powder Technol. 160:219.
+//! Reference: docs/physics.md; Li, Xu, Thornton (2005) Powder Technol. 160:219.
 //!
 //! ```
 //! use tilth_kernel::timestep::rayleigh_time;
@@ -30,10 +30,30 @@ pub const BOND_WARN_FRACTION: f64 = 0.1;
 /// shear specimen, over-compacted when its friction was lost, had 7.7.
 pub const LOADED_COORDINATION: f64 = 6.0;
 
-/// Longest stable step (s) for a packing of equal spheres (radius `r` m, density `rho`
-/// kg/m^3, Young's modulus `e` Pa, Poisson ratio `nu`, restitution coefficient
-/// `restitution` of the restitution damping law) at solid fraction `phi`, with
-/// `coordination` contacts a grain, carrying the mean pressure `pressure` Pa.
+/// A packing of equal spheres under a mean pressure: what [`loaded_packing_step`]
+/// needs to know.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadedPacking {
+    /// Sphere radius, m.
+    pub radius: f64,
+    /// Particle density, kg/m^3.
+    pub density: f64,
+    /// Young's modulus, Pa.
+    pub youngs_modulus: f64,
+    /// Poisson ratio.
+    pub poisson_ratio: f64,
+    /// Coefficient of restitution of the restitution damping law.
+    pub restitution: f64,
+    /// Mean pressure the packing carries, Pa.
+    pub pressure: f64,
+    /// Contacts a grain.
+    pub coordination: f64,
+    /// Solid fraction.
+    pub solid_fraction: f64,
+}
+
+/// Longest stable step (s) for a [`LoadedPacking`]: radius r, density rho, Young's modulus
+/// E, Poisson ratio nu, coordination Z, solid fraction phi, pressure p.
 ///
 /// The Rayleigh time does not see the load: a Hertz contact stiffens as it is pressed, and
 /// a grain in a packing sits on several springs at once. So:
@@ -62,20 +82,21 @@ pub const LOADED_COORDINATION: f64 = 6.0;
 /// 0.45 it holds at this step and not at twice it; at 0.1 it holds at the damped limit and
 /// not at omega dt = 1; measured once, at 0.2 it held at omega dt = 1 and not at 1.5).
 ///
-/// Reference: Hertz and Mindlin as in physics.md; Love-Weber stress (Christoffersen, Mehrabadi
+/// Reference: Hertz and Mindlin as in docs/physics.md; Love-Weber stress (Christoffersen, Mehrabadi
 /// and Nemat-Nasser 1981, J. Appl. Mech. 48:339); the explicit scheme's limit as in O'Sullivan
 /// and Bray (2004), Eng. Comput. 21:278, who bound it with the same row sums.
-pub fn loaded_packing_step(
-    r: f64,
-    rho: f64,
-    e: f64,
-    nu: f64,
-    restitution: f64,
-    pressure: f64,
-    coordination: f64,
-    phi: f64,
-) -> f64 {
+pub fn loaded_packing_step(packing: &LoadedPacking) -> f64 {
     use std::f64::consts::PI;
+    let LoadedPacking {
+        radius: r,
+        density: rho,
+        youngs_modulus: e,
+        poisson_ratio: nu,
+        restitution,
+        pressure,
+        coordination,
+        solid_fraction: phi,
+    } = *packing;
     let d = 2.0 * r;
     let force = PI * d * d * pressure / (coordination * phi);
     let e_star = e / (2.0 * (1.0 - nu * nu));
@@ -106,7 +127,18 @@ mod tests {
     fn a_loaded_packing_steps_at_a_fraction_of_the_rayleigh_time_falling_with_the_load() {
         // The study's soil, 2 mm grains, phi 0.6, Z 6: the doc comment's numbers.
         let t_r = rayleigh_time(1e-3, 1380.0, 13.5e6 / 2.4, 0.2);
-        let step = |p, e| loaded_packing_step(1e-3, 1380.0, 13.5e6, 0.2, e, p, 6.0, 0.6) / t_r;
+        let step = |pressure, restitution| {
+            loaded_packing_step(&LoadedPacking {
+                radius: 1e-3,
+                density: 1380.0,
+                youngs_modulus: 13.5e6,
+                poisson_ratio: 0.2,
+                restitution,
+                pressure,
+                coordination: 6.0,
+                solid_fraction: 0.6,
+            }) / t_r
+        };
         assert!((step(1e5, 0.45) - 0.12).abs() < 0.01, "{}", step(1e5, 0.45));
         assert!((step(4e3, 0.45) - 0.20).abs() < 0.01, "{}", step(4e3, 0.45));
         // (p / E)^(-1/6): a 64-fold load halves the step.

@@ -4,6 +4,10 @@ use super::{CHUNK, CellGrid, chunks_per_task};
 use glam::DVec3;
 use rayon::prelude::*;
 
+/// Decides, from a pair's history row, whether a pair that left the list's reach stays
+/// listed (bonded pairs do).
+pub type PairFilter<'a> = &'a (dyn Fn(&[f64]) -> bool + Sync);
+
 /// Pairs (i, j) whose surfaces are closer than `extra` (skin + reach), listed once, in the row
 /// of the particle with the smaller id (ids never change, indices do when particles are
 /// reordered, so a contact keeps its orientation and its history's sign), grouped by i in
@@ -78,7 +82,7 @@ impl PairList {
         id: &[u32],
         extra: f64,
         old_of_new: Option<&[u32]>,
-        keep: Option<&(dyn Fn(&[f64]) -> bool + Sync)>,
+        keep: Option<PairFilter<'_>>,
     ) {
         let n = position.len();
         // New index of each old particle, to bring kept partners across a reorder.
@@ -100,7 +104,7 @@ impl PairList {
         // Room for a chunk's partners at the old list's mean with a quarter to spare. Grown
         // by doubling, each chunk's vector was reallocated about eight times, on both
         // threads at once, through glibc's arena lock (`realloc` bypasses the per-thread
-        // cache; `strace` counted its futex waits: BENCHMARKS.md, twentieth sitting).
+        // cache; `strace` counted its futex waits).
         let old_rows = self.row_start.len().saturating_sub(1).max(1);
         let per_row = self.j.len().div_ceil(old_rows).max(4) * 5 / 4;
         let chunks: Vec<RowChunk> = (0..n.div_ceil(CHUNK))
@@ -126,7 +130,7 @@ impl PairList {
                         // Whether a candidate is kept is close to a coin toss (about half
                         // have the larger id), which a branch predictor loses: write every
                         // candidate and advance past the kept ones only. 30 % off the search
-                        // (BENCHMARKS.md, fifteenth sitting); the list is the same.
+                        // on the settling bed; the list is the same.
                         for &j in *run {
                             let ju = j as usize;
                             let cut = ri + radius[ju] + extra;
@@ -161,7 +165,7 @@ impl PairList {
         let total: usize = chunks.iter().map(|c| c.j.len()).sum();
         // Refill the spare buffers, every value of which the tasks below write, in parallel:
         // joining the chunks' rows and zeroing the history first were serial passes while
-        // the other thread waited (BENCHMARKS.md, twenty-third sitting).
+        // the other thread waited.
         resized(&mut b.i, total);
         resized(&mut b.j, total);
         resized(&mut b.row_start, n + 1);

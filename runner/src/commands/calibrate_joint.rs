@@ -39,6 +39,10 @@ use tilth_tools::calibrate::{
 };
 use tilth_tools::rsm::Anova;
 
+/// One measurement's response surface: the measurement, the fitted surface, the points it was
+/// fitted to (parameter values, reading) and how many runs were planned for it.
+type MeasurementFit = (Measurement, Anova, Vec<(Vec<f64>, f64)>, usize);
+
 /// One measurement in the joint fit.
 #[derive(Debug, Clone, Serialize)]
 pub struct JointRow {
@@ -144,7 +148,7 @@ pub fn joint(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
         .map_err(|e| not_taken(e, test, &params))?;
         plans.push((test, mine, plan));
     }
-    let mut fits: Vec<(Measurement, Anova, Vec<(Vec<f64>, f64)>, usize)> = vec![];
+    let mut fits: Vec<MeasurementFit> = vec![];
     for (test, mine, plan) in plans {
         let values = run_and_read(
             &plan,

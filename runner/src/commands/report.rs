@@ -152,17 +152,31 @@ impl Sample {
     }
 }
 
+/// What a run cost: the threads it ran on, its set-up and wall seconds, the time in each
+/// phase and the particle-steps it made.
+#[derive(Debug, Clone, Copy)]
+pub struct RunCost<'a> {
+    pub threads: usize,
+    pub setup_seconds: f64,
+    pub wall_seconds: f64,
+    pub times: &'a PhaseTimes,
+    pub particle_steps: u64,
+}
+
 impl RunReport {
     pub fn new(
         sim: &Simulation,
         info: &SceneInfo,
-        threads: usize,
-        setup_seconds: f64,
-        wall_seconds: f64,
-        times: &PhaseTimes,
-        particle_steps: u64,
+        cost: RunCost<'_>,
         samples: Vec<Sample>,
     ) -> RunReport {
+        let RunCost {
+            threads,
+            setup_seconds,
+            wall_seconds,
+            times,
+            particle_steps,
+        } = cost;
         let g = sim.gravity.length();
         let total_weight: f64 = sim.particles.mass.iter().sum::<f64>() * g;
         let down = sim.gravity.normalize_or_zero();

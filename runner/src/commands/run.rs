@@ -1,6 +1,6 @@
 //! `tilth run [FILE]`: load a scene, step it with a progress bar, print a summary.
 
-use super::report::{RunReport, Sample};
+use super::report::{RunCost, RunReport, Sample};
 use crate::config;
 use crate::progress::Progress;
 use anyhow::{Context, Result};
@@ -113,16 +113,15 @@ pub fn simulate(
     }
     let wall_seconds = start.elapsed().as_secs_f64();
     progress.finish();
-    Ok(RunReport::new(
-        &sim,
-        &info,
+    let times = sim.times - times_before;
+    let cost = RunCost {
         threads,
         setup_seconds,
         wall_seconds,
-        &(sim.times - times_before),
+        times: &times,
         particle_steps,
-        samples,
-    ))
+    };
+    Ok(RunReport::new(&sim, &info, cost, samples))
 }
 
 /// `tilth run EXPERIMENT`: one run through the sweep machinery (pinned core, MCAP, summary).

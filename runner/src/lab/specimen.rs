@@ -8,7 +8,7 @@ use super::sizes::SizeMix;
 use anyhow::{Result, bail};
 use tilth_kernel::DVec3;
 use tilth_kernel::sim::Simulation;
-use tilth_kernel::timestep::{LOADED_COORDINATION, loaded_packing_step};
+use tilth_kernel::timestep::{LOADED_COORDINATION, LoadedPacking, loaded_packing_step};
 use tilth_kernel::wall::Motion;
 use toml::Value;
 
@@ -66,7 +66,7 @@ impl MeanForce {
     }
 }
 
-/// The inertial number I = gamma_dot d sqrt(rho / p) (GDR MiDi 2004; physics.md):
+/// The inertial number I = gamma_dot d sqrt(rho / p) (GDR MiDi 2004; docs/physics.md):
 /// below about 1e-3 the loading is quasi-static.
 pub fn inertial_number(strain_rate: f64, d: f64, rho: f64, pressure: f64) -> f64 {
     if pressure <= 0.0 {
@@ -90,7 +90,7 @@ pub fn press(force: f64, max_speed: f64) -> Motion {
 /// Fraction of a bond's oscillation time scale sqrt(m / (S_n A)) the time step may be. The
 /// Rayleigh step does not see bonds; each particle carries several in parallel, with their
 /// bending and twisting springs, and at 0.2 of that scale the coarse UCS test gained energy
-/// until it blew up while at 0.07 it ran clean (BENCHMARKS.md, virtual lab).
+/// until it blew up while at 0.07 it ran clean.
 pub const BOND_DT_FRACTION: f64 = 0.08;
 
 /// The time steps of a bonded specimen, s.
@@ -171,16 +171,16 @@ pub fn loaded_steps(c: &Common, d: f64, packing: f64, loads: Loads) -> Result<(f
     let (rho, e) = (soil_density(c.model)?, soil_modulus(c.model)?);
     let (nu, restitution) = (soil_poisson_ratio(c.model), soil_restitution(c)?);
     let step = |pressure| {
-        loaded_packing_step(
-            0.5 * d,
-            rho,
-            e,
-            nu,
+        loaded_packing_step(&LoadedPacking {
+            radius: 0.5 * d,
+            density: rho,
+            youngs_modulus: e,
+            poisson_ratio: nu,
             restitution,
             pressure,
-            LOADED_COORDINATION,
-            packing,
-        )
+            coordination: LOADED_COORDINATION,
+            solid_fraction: packing,
+        })
     };
     Ok((step(loads.compaction), step(loads.test)))
 }

@@ -6,7 +6,7 @@
 
 use super::observe::{self, Heap};
 use super::plan::{Plan, PlannedRun, innermost};
-use crate::commands::report::RunReport;
+use crate::commands::report::{RunCost, RunReport};
 use crate::lab::protocol::{Control, Protocol};
 use crate::record::writer::RunLayout;
 use crate::record::{Recorder, RecorderStats, snapshot};
@@ -308,16 +308,14 @@ fn simulate(
         summary.heap = serde_json::to_value(h).ok();
     }
     let times = sim.times - times_before;
-    let report = RunReport::new(
-        &sim,
-        &info,
+    let cost = RunCost {
         threads,
-        0.0,
-        wall,
-        &times,
+        setup_seconds: 0.0,
+        wall_seconds: wall,
+        times: &times,
         particle_steps,
-        vec![],
-    );
+    };
+    let report = RunReport::new(&sim, &info, cost, vec![]);
     summary.report = serde_json::to_value(&report).ok();
     if let Some(e) = failure {
         summary.mcap = Some("run.mcap.partial".into());

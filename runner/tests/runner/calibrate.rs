@@ -276,8 +276,9 @@ fn quadratic(pts: &[(f64, f64)]) -> ([f64; 3], f64) {
         for r in 0..3 {
             if r != c {
                 let f = m[r][c] / m[c][c];
-                for k in 0..4 {
-                    m[r][k] -= f * m[c][k];
+                let pivot = m[c];
+                for (x, p) in m[r].iter_mut().zip(pivot) {
+                    *x -= f * p;
                 }
             }
         }

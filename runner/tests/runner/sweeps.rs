@@ -191,6 +191,10 @@ fn run_sweep(out: &Path) -> Output {
 }
 
 /// Starts the tiny sweep on one core and waits until `done` runs are done.
+#[expect(
+    clippy::zombie_processes,
+    reason = "the caller kills the child and waits for it"
+)]
 fn start_and_wait(out: &Path, done: usize) -> std::process::Child {
     let child = tilth()
         .args(["sweep", "run", "--cores", "1", "--quiet", "--out"])

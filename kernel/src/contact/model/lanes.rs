@@ -114,8 +114,11 @@ impl ContactModel {
 pub struct TypedModel<'a, N, D, T, R, X> {
     materials: usize,
     layout: &'a HistoryLayout,
-    pairs: Vec<Option<TypedLaws<'a, N, D, T, R, X>>>,
+    pairs: Vec<PairLaws<'a, N, D, T, R, X>>,
 }
+
+/// One material pair's laws, or none when the pair has no contact model.
+type PairLaws<'a, N, D, T, R, X> = Option<TypedLaws<'a, N, D, T, R, X>>;
 
 impl<N, D, T, R, X> LaneLaws for TypedModel<'_, N, D, T, R, X>
 where
