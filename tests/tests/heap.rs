@@ -109,7 +109,10 @@ fn epsd_heap_comes_to_rest() {
         (load - weight).abs() < 1e-3 * weight,
         "walls carry {load} N of {weight} N"
     );
-    // A heap, not a monolayer: its top stands at least two particle layers above the floor.
+    // A heap, not a monolayer: a grain of the floor layer has its centre at R, one resting on
+    // other grains at R + 2 R sqrt(2/3) or higher, so some centre stands above 2 R. (Over pour
+    // seeds 1-24 every heap came to rest by the bound above, and the highest centre was at
+    // 3.96 mm or more: a bar of two diameters, 4 mm, failed seed 9.)
     let top = p.position.iter().map(|x| x.z).fold(0.0, f64::max);
-    assert!(top > 2.0 * 2.0 * R, "heap top at {top} m");
+    assert!(top > 2.0 * R, "heap top at {top} m");
 }

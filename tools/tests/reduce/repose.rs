@@ -213,17 +213,27 @@ fn flat_layer_is_refused() {
     assert!(e.to_string().contains("half"), "{e}");
 }
 
-/// The numbers quoted in repose.rs and cone.rs: the error of the photograph method
-/// (default settings) and of the cone fit over 20 seeds of each synthetic heap.
-/// `cargo test -p tilth-tools --release --test reduce seed_sweep -- --ignored --nocapture`
+/// The accuracy quoted in `tools/src/reduce/repose.rs`, held over 20 seeds of each synthetic
+/// heap (deterministic: the heaps come from fixed seeds). With the default settings, on a
+/// surface layer of touching spheres the photograph method is within 0.2 degrees of the cone
+/// on every seed; on the rough random surface it reads low, by less than 0.5 degrees on
+/// average; the cone fit's mean error is within 0.05 degrees on both. `--nocapture` prints
+/// the statistics of every method.
 #[test]
-#[ignore = "statistics for the documentation, not a check"]
-fn seed_sweep() {
+fn photograph_method_accuracy_over_seeds() {
     let methods = [
         (SilhouetteMethod::Envelope, None),
         (SilhouetteMethod::Envelope, Some(cone::DIAMETER)),
         (SilhouetteMethod::HighestTop, None),
     ];
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let worst = |v: &[f64]| v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let stats = |v: &[f64]| {
+        let m = mean(v);
+        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt();
+        format!("bias {m:+.3} sd {sd:.3} worst {:.3}", worst(v))
+    };
+    let mut failures = vec![];
     for surface in [Surface::Rings, Surface::Random] {
         for theta in [30.0, 40.0] {
             for (method, bin_width_m) in methods {
@@ -232,27 +242,35 @@ fn seed_sweep() {
                     bin_width_m,
                     ..ReposeOptions::default()
                 };
-                let (mut mean, mut cone_fit) = (vec![], vec![]);
+                let (mut angle, mut cone_fit) = (vec![], vec![]);
                 for seed in 0..20 {
                     let (heap, _) = cone::synthetic_cone(theta, seed, surface);
                     let a = repose_angle(&heap, &tray(), &options).unwrap();
-                    mean.push(a.repose_angle_deg - theta);
+                    angle.push(a.repose_angle_deg - theta);
                     cone_fit.push(a.cone.angle_deg - theta);
                 }
-                let stats = |v: &[f64]| {
-                    let m = v.iter().sum::<f64>() / v.len() as f64;
-                    let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>()
-                        / (v.len() - 1) as f64)
-                        .sqrt();
-                    let worst = v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                    format!("bias {m:+.3} sd {sd:.3} worst {worst:.3}")
-                };
+                let label = format!("{surface:?} {theta} deg, {method:?} bins {bin_width_m:?}");
                 eprintln!(
-                    "{surface:?} {theta} deg, {method:?} bins {bin_width_m:?}: angle {}; cone {}",
-                    stats(&mean),
+                    "{label}: angle {}; cone {}",
+                    stats(&angle),
                     stats(&cone_fit)
                 );
+                if (method, bin_width_m) != methods[0] {
+                    continue;
+                }
+                let holds = match surface {
+                    Surface::Rings => worst(&angle) <= 0.2,
+                    Surface::Random => mean(&angle) < 0.0 && mean(&angle) > -0.5,
+                };
+                if !holds || mean(&cone_fit).abs() > 0.05 {
+                    failures.push(format!(
+                        "{label}: angle {}; cone {}",
+                        stats(&angle),
+                        stats(&cone_fit)
+                    ));
+                }
             }
         }
     }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
