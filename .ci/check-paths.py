@@ -35,7 +35,8 @@ NOT_CITATIONS = {
 
 def tracked_files():
     out = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True)
-    return [ROOT / p for p in out.stdout.splitlines() if p.endswith(SCANNED)]
+    this = Path(__file__).resolve().relative_to(ROOT).as_posix()
+    return [ROOT / p for p in out.stdout.splitlines() if p.endswith(SCANNED) and p != this]
 
 
 def exists(cited: str, source: Path) -> bool:
