@@ -1,6 +1,6 @@
 //! The discovery loop proven on synthetic data at the coarse preset (docs/discovery.md, "The
 //! proof with simulations"), through the scripts a user runs. The slow tier: every test here
-//! is `#[ignore]`d and runs with `cargo test --workspace --release -- --ignored` (about 25
+//! is `#[ignore]`d and runs with `cargo test --workspace --release -- --ignored` (about 27
 //! minutes on 2 cores; one run cache serves all, so the model's own runs are made once).
 //!
 //! The data are one realisation of the noise and of the grains' chaos, and any change of the
@@ -15,12 +15,12 @@
 //!   that named it only as often as the null study's false alarms (0.05) would pass with
 //!   probability 3.7e-4;
 //! - hidden plastic adhesion (0.04): its signature is close to other adhesions' and to
-//!   twisting's with funnel-only readings, and it comes first and significant on 5 of 8
-//!   draws (seeds 3-10) with today's score. "At least 5 of 20" fails at p = 0.625 with
-//!   probability 1.3e-4 (3.2e-4 at the rule-of-succession rate 0.6). A diagnosis at the
-//!   false-alarm rate would pass with probability 0.0026, one that named a candidate at
-//!   random (1 in 6) first and significant every time with probability 0.23: the bar shows
-//!   that the loop finds this effect, not that it tells it from the others (open work);
+//!   twisting's with funnel-only readings, and it comes first and significant on 11 of 20
+//!   draws (seeds 3-22, CI's bits). "At least 4 of 20" fails at p = 0.55 with probability
+//!   2.8e-4 (3.2e-4 at the rule-of-succession rate 12/22). A diagnosis at the false-alarm
+//!   rate would pass with probability 0.016, one that named a candidate at random (1 in 6)
+//!   first and significant every time with probability 0.43: the bar shows that the loop
+//!   finds this effect, not that it tells it from the others (open work);
 //! - after `fit` on the first draw where the fine fraction is ranked first, the data no
 //!   longer reject the model: over the study's 16 rows, chi^2 = sum z_i^2 (`tilth compare`'s
 //!   z-scores) has P(chi^2_16 > chi^2) >= ALPHA = 1e-6, and it is below the chi^2 before the
@@ -205,8 +205,8 @@ fn hidden_wall_adhesion_is_ranked_first_on_at_least_4_of_8_draws() {
 
 #[test]
 #[ignore = "slow tier: the discovery proof"]
-fn hidden_plastic_adhesion_is_ranked_first_on_at_least_5_of_20_draws() {
-    assert_detected("plastic_adhesion", 0.04, 3, DRAWS_PLASTIC, 5);
+fn hidden_plastic_adhesion_is_ranked_first_on_at_least_4_of_20_draws() {
+    assert_detected("plastic_adhesion", 0.04, 3, DRAWS_PLASTIC, 4);
 }
 
 #[test]
