@@ -48,6 +48,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
+pub mod discriminate;
 pub mod verdict;
 
 /// Below this fraction of its signature left after the free parameters, a candidate is

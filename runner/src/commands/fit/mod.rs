@@ -34,6 +34,7 @@
 //! `DIR/fit.md`, and `DIR/model.toml`: the model with the fitted parameters, ready for
 //! `tilth compare`. Runs go to `DIR/runs/iter-K/<variant>/` and resume.
 
+mod from_diagnosis;
 mod jacobian_noise;
 mod stop;
 
@@ -62,8 +63,13 @@ pub struct FitArgs {
     pub data: PathBuf,
     /// A free parameter: `PAIR.KEY=LOW:HIGH` or `candidate.NAME=LOW:HIGH[@START]`
     /// (repeatable).
-    #[arg(long = "param", required = true)]
+    #[arg(long = "param", required_unless_present = "from_diagnosis")]
     pub params: Vec<String>,
+    /// Act on `tilth diagnose`'s verdict in DIR/diagnosis.json: its free parameters, and the
+    /// strength of each effect it names (from its estimate). Refused unless the verdict is
+    /// `effect`. Any --param is added.
+    #[arg(long, value_name = "DIR")]
+    pub from_diagnosis: Option<PathBuf>,
     /// Runs per row and setting (seeds 1..R, the same at every setting).
     #[arg(long, default_value_t = 3)]
     pub replicates: usize,
@@ -295,8 +301,20 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         .with_context(|| format!("{}: not TOML", args.model.display()))?;
     let rows = read_measurements(&args.data)?;
     check_against_model(&rows, &model, &args.data)?;
-    let params: Vec<FreeParam> = args
-        .params
+    let mut asked = args.params.clone();
+    if let Some(dir) = &args.from_diagnosis {
+        let step = |name: &str| model.file.candidates.get(name).map(|c| c.step);
+        for p in from_diagnosis::params_from_diagnosis(dir, &step)? {
+            let label = p.split('=').next().unwrap_or_default().to_string();
+            if !asked
+                .iter()
+                .any(|a| a.split('=').next() == Some(label.as_str()))
+            {
+                asked.push(p);
+            }
+        }
+    }
+    let params: Vec<FreeParam> = asked
         .iter()
         .map(|s| parse(s, &model, &doc))
         .collect::<Result<_>>()?;

@@ -27,7 +27,9 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
-use tilth_tools::diagnose::{Candidate, JacobianNoise, Score, Unidentified, score_tests};
+use tilth_tools::diagnose::{Candidate, JacobianNoise, Score, score_tests};
+
+mod report;
 
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -46,6 +48,12 @@ pub struct DiagnoseArgs {
     /// Only these candidates (default: all in the model file).
     #[arg(long, value_delimiter = ',')]
     pub candidates: Vec<String>,
+    /// A model parameter the diagnosis holds fixed, weighed against the candidates,
+    /// PAIR.KEY=STEP (repeatable): its sensitivity (the model with it raised by STEP) takes
+    /// part in the verdict as a candidate would, so a misfit that a miscalibrated parameter
+    /// explains is not blamed on an effect (e.g. soil-soil.surface_energy=0.05).
+    #[arg(long = "probe")]
+    pub probes: Vec<String>,
     /// Runs per row and variant, with seeds 1, 2, ... shared by every variant.
     #[arg(long, default_value_t = 3)]
     pub replicates: usize,
@@ -98,6 +106,64 @@ pub struct Diagnosed {
     /// estimated strength and recalibrating the free parameters.
     pub predicted_rmse_drop: BTreeMap<String, f64>,
     pub description: Option<String>,
+    /// A parameter held fixed (`--probe`), not an effect.
+    pub held_parameter: bool,
+}
+
+/// The name a `--probe PAIR.KEY` goes by among the candidates.
+pub const HELD: &str = "held:";
+
+/// `PAIR.KEY=STEP` of `--probe`.
+fn parse_probe(s: &str) -> Result<(String, f64)> {
+    let (path, step) = s.split_once('=').unwrap_or((s, ""));
+    let step: f64 = step.trim().parse().map_err(|_| {
+        anyhow::anyhow!("--probe {s:?}: expected PAIR.KEY=STEP, e.g. soil-soil.surface_energy=0.05")
+    })?;
+    if !(step.is_finite() && step != 0.0) || !path.contains('.') {
+        bail!(
+            "--probe {s:?}: STEP {step} is out of range: allowed a non-zero number, with PAIR.KEY before it"
+        );
+    }
+    Ok((path.trim().to_string(), step))
+}
+
+/// Every candidate asked for exists in the model file with a usable step and strength.
+fn check_candidates(names: &[String], model: &Model, path: &std::path::Path) -> Result<()> {
+    if names.is_empty() {
+        bail!(
+            "{}: no [candidates.NAME] sections: nothing to diagnose (see docs/discovery.md)",
+            path.display()
+        );
+    }
+    for n in names {
+        let Some(c) = model.file.candidates.get(n) else {
+            bail!(
+                "--candidates: `{n}` is not in {}; it has {}",
+                path.display(),
+                model
+                    .file
+                    .candidates
+                    .keys()
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        };
+        if !(c.step.is_finite() && c.step != 0.0) {
+            bail!(
+                "{}: candidates.{n}.step = {} is out of range: allowed a non-zero number",
+                path.display(),
+                c.step
+            );
+        }
+        if c.strength.is_empty() {
+            bail!(
+                "{}: candidates.{n}.strength is empty: name at least one PAIR.KEY",
+                path.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
@@ -138,40 +204,12 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     } else {
         args.candidates.clone()
     };
-    if names.is_empty() {
-        bail!(
-            "{}: no [candidates.NAME] sections: nothing to diagnose (see docs/discovery.md)",
-            args.model.display()
-        );
-    }
-    for n in &names {
-        let Some(c) = model.file.candidates.get(n) else {
-            bail!(
-                "--candidates: `{n}` is not in {}; it has {}",
-                args.model.display(),
-                model
-                    .file
-                    .candidates
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        };
-        if !(c.step.is_finite() && c.step != 0.0) {
-            bail!(
-                "{}: candidates.{n}.step = {} is out of range: allowed a non-zero number",
-                args.model.display(),
-                c.step
-            );
-        }
-        if c.strength.is_empty() {
-            bail!(
-                "{}: candidates.{n}.strength is empty: name at least one PAIR.KEY",
-                args.model.display()
-            );
-        }
-    }
+    check_candidates(&names, &model, &args.model)?;
+    let probes: Vec<(String, f64)> = args
+        .probes
+        .iter()
+        .map(|p| parse_probe(p))
+        .collect::<Result<_>>()?;
 
     // The variants, written and checked before any run.
     let models_dir = args.out.join("models");
@@ -200,6 +238,16 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         })?;
         variants.push((name, path, step));
     }
+    for (key, step) in &probes {
+        let name = format!("probe-{key}");
+        let path = variant(&model, &text, &models_dir, &name, |d| add_to(d, key, *step))?;
+        variants.push((name, path, *step));
+    }
+    // The candidates' columns, then the probes'.
+    let names: Vec<String> = names
+        .into_iter()
+        .chain(probes.iter().map(|(k, _)| format!("{HELD}{k}")))
+        .collect();
 
     let stop = execute::stop_on_signals()?;
     let outs: Vec<std::path::PathBuf> = variants
@@ -341,6 +389,14 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         })
         .collect();
     let scores = score_tests(&residual, &x, &jacobian_noise, &candidates);
+    let verdict = tilth_tools::diagnose::verdict::verdict(
+        &residual,
+        &x,
+        &jacobian_noise,
+        &candidates,
+        &scores,
+        args.alpha,
+    );
     let absorbed = tilth_tools::diagnose::absorbed(&residual, &x);
     let shift = tilth_tools::diagnose::recalibration(&residual, &x);
     let doc: toml_edit::DocumentMut = text.parse()?;
@@ -392,7 +448,11 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                     .iter()
                     .map(|(k, b)| (k.clone(), b - after[k]))
                     .collect(),
-                description: model.file.candidates[&s.name].description.clone(),
+                description: match s.name.strip_prefix(HELD) {
+                    Some(key) => Some(format!("the model's {key}, held fixed")),
+                    None => model.file.candidates[&s.name].description.clone(),
+                },
+                held_parameter: s.name.starts_with(HELD),
                 score: s,
             }
         })
@@ -412,12 +472,29 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "rmse_after_recalibration": before,
         "recalibration": recalibrated,
         "candidates": diagnosed,
+        "probes": probes.iter().map(|(k, h)| serde_json::json!({"parameter": k, "step": h})).collect::<Vec<_>>(),
+        "verdict": verdict,
+        // Standardised, one number per entry of "rows": what `tilth next` extends.
+        "columns": {
+            "free": params.iter().enumerate().map(|(c, p)| (format!("{}.{}", p.pair, p.key), x.column(c).iter().copied().collect::<Vec<_>>())).collect::<BTreeMap<_, _>>(),
+            "candidates": candidates.iter().map(|c| (c.name.clone(), serde_json::json!({"sensitivity": c.sensitivity, "variance": c.sensitivity_var}))).collect::<BTreeMap<_, _>>(),
+        },
+        "rows": used.iter().enumerate().map(|(r, &(i, se))| serde_json::json!({
+            "row": rows[i].row,
+            "test": rows[i].test,
+            "observable": rows[i].observable,
+            "conditions": rows[i].conditions,
+            "measured": rows[i].value,
+            "simulated": means[0][i],
+            "standard_error": se,
+            "residual_z": residual[r],
+        })).collect::<Vec<_>>(),
     });
     std::fs::write(
         args.out.join("diagnosis.json"),
         serde_json::to_vec_pretty(&json)?,
     )?;
-    let md = report(
+    let md = report::report(
         args,
         &params,
         &diagnosed,
@@ -425,6 +502,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         &before,
         &recalibrated,
         &dropped,
+        &verdict,
     );
     std::fs::write(args.out.join("diagnosis.md"), &md)?;
     out.write_all(md.as_bytes())?;
@@ -434,236 +512,4 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         args.out.display()
     )?;
     Ok(())
-}
-
-fn report(
-    args: &DiagnoseArgs,
-    params: &[Param],
-    d: &[Diagnosed],
-    now: &BTreeMap<String, f64>,
-    before: &BTreeMap<String, f64>,
-    recalibrated: &[Recalibrated],
-    dropped: &[String],
-) -> String {
-    let mut md = format!(
-        "# Diagnosis of {} against {}\n\n",
-        args.model.display(),
-        args.data.display()
-    );
-    let free: Vec<String> = params
-        .iter()
-        .map(|p| format!("{}.{}", p.pair, p.key))
-        .collect();
-    md += &format!(
-        "Free parameters: {}. {} replicate{} per run; significance at a Holm-corrected p < {}.\n\n",
-        if free.is_empty() {
-            "none".into()
-        } else {
-            format!(
-                "{} (slopes from finite differences of {} % of each range)",
-                free.join(", "),
-                crate::sweep::plan::num(100.0 * args.param_step)
-            )
-        },
-        args.replicates,
-        if args.replicates == 1 { "" } else { "s" },
-        args.alpha
-    );
-    for (k, v) in now {
-        md += &format!(
-            "- {k}: RMSE now {v:.4}; what recalibrating the free parameters alone would leave: {:.4}\n",
-            before[k]
-        );
-    }
-    if !recalibrated.is_empty() {
-        md += &recalibration_table(recalibrated);
-    }
-    md += "\n| rank | candidate | statistic | p (corrected) | strength | RMSE drop | identifiable |\n|---|---|---|---|---|---|---|\n";
-    for (r, c) in d.iter().enumerate() {
-        let drop: Vec<String> = c
-            .predicted_rmse_drop
-            .iter()
-            .map(|(k, v)| format!("{k} {v:.3}"))
-            .collect();
-        md += &format!(
-            "| {} | {} | {:.2} | {} | {:.4} | {} | {} |\n",
-            r + 1,
-            c.score.name,
-            c.score.statistic,
-            tilth_tools::compare::p_text(c.score.p_value).trim_start_matches("= "),
-            c.score.strength,
-            drop.join(", "),
-            match c.score.unidentified {
-                None => "yes".to_string(),
-                Some(Unidentified::Absorbed) => format!(
-                    "no: absorbed ({:.0} % distinct)",
-                    100.0 * c.score.distinct_fraction
-                ),
-                Some(Unidentified::Unmeasured) => "no: within its noise".to_string(),
-            }
-        );
-    }
-    md += "\n";
-    let sig: Vec<&Diagnosed> = d.iter().filter(|c| c.significant).collect();
-    match sig.first() {
-        Some(best) => {
-            md += &format!(
-                "**{}** explains the residuals best: corrected p {}, estimated strength {:.4}. Switch it on with its strength free, recalibrate and compare again.",
-                best.score.name,
-                tilth_tools::compare::p_text(best.score.p_value),
-                best.score.strength
-            );
-            if !best.score.alike.is_empty() {
-                md += &format!(
-                    " But its signature is alike to {}: these measurements cannot tell them apart, so the ranking between them is not a discovery; a test or condition where their effects differ can.",
-                    best.score
-                        .alike
-                        .iter()
-                        .map(|(n, c)| format!("{n}'s (cos {c:.2})"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                );
-            }
-            if sig.len() > 1 {
-                md += &format!(
-                    " Also significant: {}; test again after adding the first, as candidates with similar signatures share the same residual.",
-                    sig[1..]
-                        .iter()
-                        .map(|c| c.score.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                );
-            }
-            md += "\n";
-        }
-        None => {
-            md += "No candidate is significant: the residuals are what the free parameters and the noise explain, or the missing effect is none of the candidates.\n";
-        }
-    }
-    for c in d.iter().filter(|c| !c.score.identifiable) {
-        md += &match c.score.unidentified {
-            Some(Unidentified::Absorbed) => format!(
-                "\n\n{} is not identifiable from these measurements: once the free parameters are recalibrated, only {:.0} % of its signature is left (the threshold is {:.0} %), so its effect cannot be told from theirs. It is not a discovery.",
-                c.score.name,
-                100.0 * c.score.distinct_fraction,
-                100.0 * tilth_tools::diagnose::MIN_DISTINCT
-            ),
-            _ => format!(
-                "\n\n{} is not identifiable at this noise: what the free parameters leave of its signature is no larger than the scatter of its finite difference. Run more replicates or a larger step.",
-                c.score.name
-            ),
-        };
-    }
-    if !dropped.is_empty() {
-        md += &format!("\n\nRows left out: {}.", dropped.join("; "));
-    }
-    md += "\n";
-    md
-}
-
-/// The linear recalibration behind the "would leave" numbers, and a warning when it is an
-/// extrapolation: a shift out of the range the sensitivities were measured over, or a
-/// parameter whose effect was not measured (its least-squares shift is then noise).
-fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
-    let nums = |v: &[f64]| {
-        v.iter()
-            .map(|x| format!("{x:.4}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let mut md = "\nThat recalibration, linearised (each free parameter's least-squares shift):\n\n| parameter | now | shift | after | range | |\n|---|---|---|---|---|---|\n".to_string();
-    for r in recalibrated {
-        let mut flags = vec![];
-        if !r.within_range {
-            flags.push("leaves its range");
-        }
-        if !r.measurable {
-            flags.push("no measurable effect");
-        }
-        md += &format!(
-            "| {} | {} | {:+.4} | {} | {} .. {} | {} |\n",
-            r.parameter,
-            nums(&r.now),
-            r.shift,
-            nums(&r.after),
-            r.range[0],
-            r.range[1],
-            flags.join(", ")
-        );
-    }
-    let out: Vec<&str> = recalibrated
-        .iter()
-        .filter(|r| !r.within_range)
-        .map(|r| r.parameter.as_str())
-        .collect();
-    let flat: Vec<&str> = recalibrated
-        .iter()
-        .filter(|r| !r.measurable)
-        .map(|r| r.parameter.as_str())
-        .collect();
-    if !out.is_empty() || !flat.is_empty() {
-        md += "\n**The \"would leave\" numbers are an extrapolation, not a prediction.**";
-        if !out.is_empty() {
-            md += &format!(
-                " The shift takes {} outside the range its sensitivity was measured over, where the linear model has no support.",
-                out.join(", ")
-            );
-        }
-        if !flat.is_empty() {
-            md += &format!(
-                " {} had no effect on these measurements above the noise of its estimate, so its shift is fitted to noise: fix it, measure it with more replicates or a longer --param-step, or add a test that responds to it.",
-                flat.join(", ")
-            );
-        }
-        if flat.is_empty() {
-            md += " The candidates' statistics and p-values do not rest on this number.";
-        }
-        md += "\n";
-    }
-    if !flat.is_empty() {
-        md += &format!(
-            "\n**A candidate called significant here may stand for {}.** What the candidates are tested against is the residual left once the free parameters' measured effect is taken out; an effect measured as noise takes nothing out, so a misfit that {} would explain stays in the residual, and a candidate with a signature like it takes the credit. (On data from a truth whose rolling friction was 0.05 above the model's and no effect hidden, a 5 % step called a candidate significant in 8 of 20 seeds, a 10 % step in none: docs/discovery.md, \"A free parameter off\".) Fit the free parameters to these data first, or diagnose again with more replicates or a longer --param-step.\n",
-            flat.join(", "),
-            if flat.len() == 1 { "it" } else { "they" }
-        );
-    }
-    md
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn param(within_range: bool, measurable: bool) -> Recalibrated {
-        Recalibrated {
-            parameter: "soil-soil.rolling_friction".into(),
-            now: vec![0.2, 0.3],
-            shift: 0.5,
-            after: vec![0.7, 0.8],
-            range: [0.05, 0.45],
-            within_range,
-            measurable,
-        }
-    }
-
-    #[test]
-    fn an_extrapolated_recalibration_is_named_as_one() {
-        let ok = recalibration_table(&[param(true, true)]);
-        assert!(ok.contains("| soil-soil.rolling_friction | 0.2000, 0.3000 | +0.5000 | 0.7000, 0.8000 | 0.05 .. 0.45 |"), "{ok}");
-        assert!(!ok.contains("extrapolation"), "{ok}");
-        let out = recalibration_table(&[param(false, true)]);
-        assert!(
-            out.contains("leaves its range") && out.contains("outside the range"),
-            "{out}"
-        );
-        let flat = recalibration_table(&[param(true, false)]);
-        assert!(
-            flat.contains("no measurable effect") && flat.contains("fitted to noise"),
-            "{flat}"
-        );
-        // And the candidates' tests could not take its misfit out: the report says so.
-        let stand_in = "may stand for soil-soil.rolling_friction";
-        assert!(flat.contains(stand_in), "{flat}");
-        assert!(!ok.contains(stand_in) && !out.contains(stand_in), "{out}");
-    }
 }

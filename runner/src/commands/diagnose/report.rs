@@ -1,0 +1,326 @@
+//! `diagnosis.md`: the ranking, the verdict and the recalibration in words.
+
+use super::HELD;
+use super::{DiagnoseArgs, Diagnosed, Recalibrated};
+use crate::commands::calibrate::Param;
+use std::collections::BTreeMap;
+use tilth_tools::compare::p_text;
+use tilth_tools::diagnose::Unidentified;
+use tilth_tools::diagnose::verdict::{Kind, Verdict};
+
+pub(super) fn report(
+    args: &DiagnoseArgs,
+    params: &[Param],
+    d: &[Diagnosed],
+    now: &BTreeMap<String, f64>,
+    before: &BTreeMap<String, f64>,
+    recalibrated: &[Recalibrated],
+    dropped: &[String],
+    verdict: &Verdict,
+) -> String {
+    let mut md = format!(
+        "# Diagnosis of {} against {}\n\n",
+        args.model.display(),
+        args.data.display()
+    );
+    let free: Vec<String> = params
+        .iter()
+        .map(|p| format!("{}.{}", p.pair, p.key))
+        .collect();
+    md += &format!(
+        "Free parameters: {}. {} replicate{} per run; significance at a Holm-corrected p < {}.\n\n",
+        if free.is_empty() {
+            "none".into()
+        } else {
+            format!(
+                "{} (slopes from finite differences of {} % of each range)",
+                free.join(", "),
+                crate::sweep::plan::num(100.0 * args.param_step)
+            )
+        },
+        args.replicates,
+        if args.replicates == 1 { "" } else { "s" },
+        args.alpha
+    );
+    for (k, v) in now {
+        md += &format!(
+            "- {k}: RMSE now {v:.4}; what recalibrating the free parameters alone would leave: {:.4}\n",
+            before[k]
+        );
+    }
+    if !recalibrated.is_empty() {
+        md += &recalibration_table(recalibrated);
+    }
+    md += "\n| rank | candidate | statistic | p (corrected) | strength | RMSE drop | identifiable |\n|---|---|---|---|---|---|---|\n";
+    for (r, c) in d.iter().enumerate() {
+        let drop: Vec<String> = c
+            .predicted_rmse_drop
+            .iter()
+            .map(|(k, v)| format!("{k} {v:.3}"))
+            .collect();
+        md += &format!(
+            "| {} | {} | {:.2} | {} | {:.4} | {} | {} |\n",
+            r + 1,
+            c.score.name,
+            c.score.statistic,
+            tilth_tools::compare::p_text(c.score.p_value).trim_start_matches("= "),
+            c.score.strength,
+            drop.join(", "),
+            match c.score.unidentified {
+                None => "yes".to_string(),
+                Some(Unidentified::Absorbed) => format!(
+                    "no: absorbed ({:.0} % distinct)",
+                    100.0 * c.score.distinct_fraction
+                ),
+                Some(Unidentified::Unmeasured) => "no: within its noise".to_string(),
+            }
+        );
+    }
+    md += "\n";
+    md += &verdict_words(verdict, &args.out);
+    for c in d.iter().filter(|c| !c.score.identifiable) {
+        md += &match c.score.unidentified {
+            Some(Unidentified::Absorbed) => format!(
+                "\n\n{} is not identifiable from these measurements: once the free parameters are recalibrated, only {:.0} % of its signature is left (the threshold is {:.0} %), so its effect cannot be told from theirs. It is not a discovery.",
+                c.score.name,
+                100.0 * c.score.distinct_fraction,
+                100.0 * tilth_tools::diagnose::MIN_DISTINCT
+            ),
+            _ => format!(
+                "\n\n{} is not identifiable at this noise: what the free parameters leave of its signature is no larger than the scatter of its finite difference. Run more replicates or a larger step.",
+                c.score.name
+            ),
+        };
+    }
+    if !dropped.is_empty() {
+        md += &format!("\n\nRows left out: {}.", dropped.join("; "));
+    }
+    md += "\n";
+    md
+}
+
+/// The linear recalibration behind the "would leave" numbers, and a warning when it is an
+/// extrapolation: a shift out of the range the sensitivities were measured over, or a
+/// parameter whose effect was not measured (its least-squares shift is then noise).
+fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
+    let nums = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut md = "\nThat recalibration, linearised (each free parameter's least-squares shift):\n\n| parameter | now | shift | after | range | |\n|---|---|---|---|---|---|\n".to_string();
+    for r in recalibrated {
+        let mut flags = vec![];
+        if !r.within_range {
+            flags.push("leaves its range");
+        }
+        if !r.measurable {
+            flags.push("no measurable effect");
+        }
+        md += &format!(
+            "| {} | {} | {:+.4} | {} | {} .. {} | {} |\n",
+            r.parameter,
+            nums(&r.now),
+            r.shift,
+            nums(&r.after),
+            r.range[0],
+            r.range[1],
+            flags.join(", ")
+        );
+    }
+    let out: Vec<&str> = recalibrated
+        .iter()
+        .filter(|r| !r.within_range)
+        .map(|r| r.parameter.as_str())
+        .collect();
+    let flat: Vec<&str> = recalibrated
+        .iter()
+        .filter(|r| !r.measurable)
+        .map(|r| r.parameter.as_str())
+        .collect();
+    if !out.is_empty() || !flat.is_empty() {
+        md += "\n**The \"would leave\" numbers are an extrapolation, not a prediction.**";
+        if !out.is_empty() {
+            md += &format!(
+                " The shift takes {} outside the range its sensitivity was measured over, where the linear model has no support.",
+                out.join(", ")
+            );
+        }
+        if !flat.is_empty() {
+            md += &format!(
+                " {} had no effect on these measurements above the noise of its estimate, so its shift is fitted to noise: fix it, measure it with more replicates or a longer --param-step, or add a test that responds to it.",
+                flat.join(", ")
+            );
+        }
+        if flat.is_empty() {
+            md += " The candidates' statistics and p-values do not rest on this number.";
+        }
+        md += "\n";
+    }
+    if !flat.is_empty() {
+        md += &format!(
+            "\n**A candidate called significant here may stand for {}.** What the candidates are tested against is the residual left once the free parameters' measured effect is taken out; an effect measured as noise takes nothing out, so a misfit that {} would explain stays in the residual, and a candidate with a signature like it takes the credit. (On data from a truth whose rolling friction was 0.05 above the model's and no effect hidden, a 5 % step called a candidate significant in 8 of 20 seeds, a 10 % step in none: docs/discovery.md, \"A free parameter off\".) Fit the free parameters to these data first, or diagnose again with more replicates or a longer --param-step.\n",
+            flat.join(", "),
+            if flat.len() == 1 { "it" } else { "they" }
+        );
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn param(within_range: bool, measurable: bool) -> Recalibrated {
+        Recalibrated {
+            parameter: "soil-soil.rolling_friction".into(),
+            now: vec![0.2, 0.3],
+            shift: 0.5,
+            after: vec![0.7, 0.8],
+            range: [0.05, 0.45],
+            within_range,
+            measurable,
+        }
+    }
+
+    #[test]
+    fn an_extrapolated_recalibration_is_named_as_one() {
+        let ok = recalibration_table(&[param(true, true)]);
+        assert!(ok.contains("| soil-soil.rolling_friction | 0.2000, 0.3000 | +0.5000 | 0.7000, 0.8000 | 0.05 .. 0.45 |"), "{ok}");
+        assert!(!ok.contains("extrapolation"), "{ok}");
+        let out = recalibration_table(&[param(false, true)]);
+        assert!(
+            out.contains("leaves its range") && out.contains("outside the range"),
+            "{out}"
+        );
+        let flat = recalibration_table(&[param(true, false)]);
+        assert!(
+            flat.contains("no measurable effect") && flat.contains("fitted to noise"),
+            "{flat}"
+        );
+        // And the candidates' tests could not take its misfit out: the report says so.
+        let stand_in = "may stand for soil-soil.rolling_friction";
+        assert!(flat.contains(stand_in), "{flat}");
+        assert!(!ok.contains(stand_in) && !out.contains(stand_in), "{out}");
+    }
+}
+
+/// A candidate's name as a reader should see it: a held parameter is not an effect.
+fn called(name: &str) -> String {
+    match name.strip_prefix(HELD) {
+        Some(key) => format!("the held parameter {key}"),
+        None => name.to_string(),
+    }
+}
+
+/// The verdict in words: what the data call for, and what to do next.
+pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
+    let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();
+    let effects: Vec<String> = v
+        .effects
+        .iter()
+        .map(|e| {
+            format!(
+                "{} (strength {:.4} ± {:.4}, p {})",
+                called(&e.name),
+                e.strength,
+                e.standard_error,
+                p(e.p_value)
+            )
+        })
+        .collect();
+    let misfit = format!(
+        "chi^2 {:.1} on {} degrees of freedom, of which the finite differences' noise is expected to bring {:.1}: p {}",
+        v.misfit.chi2,
+        v.misfit.dof,
+        v.misfit.noise,
+        p(v.misfit.p_value)
+    );
+    let mut md = match v.verdict {
+        Kind::Effect => {
+            let mut t = format!(
+                "**Verdict: {}.** Each is needed beyond the free parameters and the others, and no other candidate explains what it explains (each was tested in its place, below). What is left after {} is within the noise ({misfit}). The strengths are one-step linear estimates: fit them on simulations with `tilth fit --from-diagnosis {}` and compare again.",
+                effects.join(" and "),
+                if v.effects.len() == 1 { "it" } else { "them" },
+                out.display()
+            );
+            if v.effects.iter().any(|e| e.name.starts_with(HELD)) {
+                t += " A held parameter named here is not an effect: it is miscalibrated. Free it with --param and fit it before any effect is added.";
+            }
+            t
+        }
+        Kind::Ambiguous => {
+            let held: Vec<String> = v
+                .ambiguous
+                .iter()
+                .filter(|n| n.starts_with(HELD))
+                .map(|n| called(n))
+                .collect();
+            let mut t = format!(
+                "**Verdict: ambiguous.** These data cannot tell {} apart: each explains what the first explains (the tests of each given another are below). Naming one of them would be a guess. Run `tilth next --diagnosis {}`: it ranks the measurements that would separate them and writes their conditions.",
+                v.ambiguous
+                    .iter()
+                    .map(|n| called(n))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                out.display()
+            );
+            if !effects.is_empty() {
+                t += &format!(" Needed before them: {}.", effects.join(", "));
+            }
+            if !held.is_empty() {
+                t += &format!(
+                    " {} could absorb the misfit: it may be a miscalibration, not a missing effect.",
+                    held.join(", ")
+                );
+            }
+            t
+        }
+        Kind::NoneOfTheCandidates => {
+            let mut t = format!(
+                "**Verdict: none of the candidates.** After the free parameters{}, what is left is more than the noise ({misfit}), and no candidate's signature explains it. The missing effect is none of these: see docs/adding-an-effect.md, or a parameter held fixed is off (weigh one with --probe PAIR.KEY=STEP).",
+                if v.effects.is_empty() && v.ambiguous.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        " and the best candidate ({})",
+                        v.effects
+                            .first()
+                            .map(|e| called(&e.name))
+                            .or_else(|| v.ambiguous.first().map(|n| called(n)))
+                            .unwrap_or_default()
+                    )
+                }
+            );
+            if !v.ambiguous.is_empty() {
+                t += &format!(
+                    " Of the candidates, {} cannot be told apart on these data.",
+                    v.ambiguous
+                        .iter()
+                        .map(|n| called(n))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
+            t
+        }
+        Kind::NoEffect => format!(
+            "**Verdict: no effect.** No candidate is needed beyond the free parameters, and what they leave is within the noise ({misfit})."
+        ),
+    };
+    md += "\n";
+    if !v.encompassing.is_empty() {
+        md += "\nEach candidate significant on its own, tested given another (is it still needed once the other is in the model?):\n\n| needed | given | statistic | p |\n|---|---|---|---|\n";
+        for e in &v.encompassing {
+            md += &format!(
+                "| {} | {} | {:.2} | {} |\n",
+                called(&e.needed),
+                called(&e.given),
+                e.statistic,
+                p(e.p_value)
+            );
+        }
+    }
+    md
+}

@@ -1,0 +1,187 @@
+//! How well a set of measurements would tell rival candidates apart: the T-optimal criterion
+//! of model discrimination (Atkinson and Fedorov 1975, Biometrika 62:57; after Box and Hill
+//! 1967, Technometrics 9:57), in the linearised, standardised form `diagnose` works in.
+//!
+//! When candidate a is the truth at strength theta_a and the rival b is fitted in its place
+//! (with the free parameters), what the rival cannot reproduce is
+//!
+//!   lambda(a -> b) = |M_[X, j_b] theta_a j_a|^2,
+//!
+//! the noncentrality of the encompassing test T(a | X, b) of [`super::verdict`] on those
+//! rows: the test rejects b in favour of a with power P(|Z + sqrt(lambda)| > z_{1-alpha/2}).
+//! A design separates the rivals when the smallest lambda over every ordered pair is large
+//! (T-optimality is the max-min of it). Columns are sensitivities per unit of each
+//! parameter, every row standardised by its standard error.
+//!
+//! The sensitivities are finite differences of noisy runs, so part of lambda is their noise:
+//! E|M theta_a d_a|^2 = theta_a^2 sum_i v_ai (m - q) / m for the estimate's noise d_a with
+//! variances v_a. It is reported, and taken off before the power.
+
+use super::ResidualMaker;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// The standardised columns of a set of rows: the free parameters', and each rival's with
+/// the variances of its estimate.
+#[derive(Debug, Clone)]
+pub struct Rows {
+    /// m x p.
+    pub free: DMatrix<f64>,
+    /// m x K: each rival's sensitivity per unit strength.
+    pub rivals: DMatrix<f64>,
+    /// m x K: the variance of each entry of `rivals`.
+    pub rival_var: DMatrix<f64>,
+}
+
+impl Rows {
+    /// These rows and `more` below them.
+    pub fn stack(&self, more: &Rows) -> Rows {
+        let cat = |a: &DMatrix<f64>, b: &DMatrix<f64>| {
+            let mut out = DMatrix::zeros(a.nrows() + b.nrows(), a.ncols());
+            out.rows_mut(0, a.nrows()).copy_from(a);
+            out.rows_mut(a.nrows(), b.nrows()).copy_from(b);
+            out
+        };
+        Rows {
+            free: cat(&self.free, &more.free),
+            rivals: cat(&self.rivals, &more.rivals),
+            rival_var: cat(&self.rival_var, &more.rival_var),
+        }
+    }
+}
+
+/// The separation of one ordered pair.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Separation {
+    pub truth: String,
+    pub rival: String,
+    /// lambda(truth -> rival), finite-difference noise included.
+    pub noncentrality: f64,
+    /// The part of it the finite differences' noise is expected to bring.
+    pub noise: f64,
+    /// Power of the encompassing test at `alpha` to reject the rival when the truth holds,
+    /// from the noncentrality less the noise.
+    pub power: f64,
+}
+
+/// Every ordered pair's separation on `rows`, each rival at its strength in `strengths`.
+pub fn separations(
+    rows: &Rows,
+    names: &[String],
+    strengths: &[f64],
+    alpha: f64,
+) -> Vec<Separation> {
+    let (m, k) = (rows.rivals.nrows(), rows.rivals.ncols());
+    assert_eq!(names.len(), k, "one name per rival");
+    assert_eq!(strengths.len(), k, "one strength per rival");
+    let z = Normal::new(0.0, 1.0)
+        .expect("standard normal")
+        .inverse_cdf(1.0 - alpha / 2.0);
+    let mut out = vec![];
+    for b in 0..k {
+        let mut xs = DMatrix::zeros(m, rows.free.ncols() + 1);
+        xs.columns_mut(0, rows.free.ncols()).copy_from(&rows.free);
+        xs.set_column(rows.free.ncols(), &rows.rivals.column(b));
+        let maker = ResidualMaker::new(&xs);
+        let kept = m.saturating_sub(maker.rank()) as f64 / m.max(1) as f64;
+        for a in (0..k).filter(|&a| a != b) {
+            let signal: DVector<f64> = rows.rivals.column(a) * strengths[a];
+            let noncentrality = maker.apply(&signal).norm_squared();
+            let noise = strengths[a].powi(2) * rows.rival_var.column(a).sum() * kept;
+            out.push(Separation {
+                truth: names[a].clone(),
+                rival: names[b].clone(),
+                noncentrality,
+                noise,
+                power: power(noncentrality - noise, z),
+            });
+        }
+    }
+    out
+}
+
+/// P(|Z + sqrt(lambda)| > z), Z standard normal: a 1-df chi^2 test's power.
+fn power(lambda: f64, z: f64) -> f64 {
+    let n = Normal::new(0.0, 1.0).expect("standard normal");
+    let shift = lambda.max(0.0).sqrt();
+    n.sf(z - shift) + n.cdf(-z - shift)
+}
+
+/// The pair hardest to tell apart: the smallest noncentrality less noise.
+pub fn worst(separations: &[Separation]) -> Option<&Separation> {
+    separations
+        .iter()
+        .min_by(|x, y| (x.noncentrality - x.noise).total_cmp(&(y.noncentrality - y.noise)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn col(v: &[f64]) -> DMatrix<f64> {
+        DMatrix::from_column_slice(v.len(), 1, v)
+    }
+
+    #[test]
+    fn a_row_where_the_rivals_differ_separates_them() {
+        // Two rows where a and b move the readings alike: nothing separates them.
+        let names = vec!["a".to_string(), "b".to_string()];
+        let old = Rows {
+            free: DMatrix::zeros(2, 0),
+            rivals: DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 2.0, 2.0]),
+            rival_var: DMatrix::zeros(2, 2),
+        };
+        let s = separations(&old, &names, &[1.0, 1.0], 0.01);
+        assert!(s.iter().all(|x| x.noncentrality < 1e-12), "{s:?}");
+        // A third row where a moves the reading by 3 and b not at all: fitting b in a's
+        // place leaves the part of a's (1, 2, 3) that b's (1, 2, 0) cannot reproduce,
+        // |(1, 2, 3) - (1, 2, 0) 5/5|^2 = 9.
+        let new = Rows {
+            free: DMatrix::zeros(1, 0),
+            rivals: DMatrix::from_row_slice(1, 2, &[3.0, 0.0]),
+            rival_var: DMatrix::zeros(1, 2),
+        };
+        let s = separations(&old.stack(&new), &names, &[1.0, 1.0], 0.01);
+        let ab = s.iter().find(|x| x.truth == "a").unwrap();
+        assert!((ab.noncentrality - 9.0).abs() < 1e-9, "{ab:?}");
+        // b as the truth: a fitted in its place, (1, 2, 0) less its projection on (1, 2, 3):
+        // 5 - 25/14.
+        let ba = s.iter().find(|x| x.truth == "b").unwrap();
+        assert!(
+            (ba.noncentrality - (5.0 - 25.0 / 14.0)).abs() < 1e-9,
+            "{ba:?}"
+        );
+        assert_eq!(worst(&s).unwrap().truth, "b");
+    }
+
+    #[test]
+    fn what_a_free_parameter_mimics_does_not_separate() {
+        // a and b differ only along the free parameter's column: recalibrating it fits b
+        // to a's data exactly.
+        let names = vec!["a".to_string(), "b".to_string()];
+        let x = col(&[1.0, -1.0, 0.5]);
+        let b = [0.3, 0.2, 0.1];
+        let a: Vec<f64> = b.iter().zip(x.iter()).map(|(b, x)| b + 2.0 * x).collect();
+        let mut rivals = DMatrix::zeros(3, 2);
+        rivals.set_column(0, &DVector::from_column_slice(&a));
+        rivals.set_column(1, &DVector::from_column_slice(&b));
+        let rows = Rows {
+            free: x,
+            rivals,
+            rival_var: DMatrix::zeros(3, 2),
+        };
+        let s = separations(&rows, &names, &[1.0, 1.0], 0.01);
+        let ab = s.iter().find(|x| x.truth == "a").unwrap();
+        assert!(ab.noncentrality < 1e-12, "{ab:?}");
+    }
+
+    #[test]
+    fn power_is_the_two_sided_normal_formula() {
+        let z = 2.5758293035489; // alpha 0.01
+        assert!((power(0.0, z) - 0.01).abs() < 1e-9);
+        // sqrt(lambda) = z: half the mass beyond, plus a negligible far tail.
+        let p = power(z * z, z);
+        assert!((p - 0.5).abs() < 1e-6, "{p}");
+    }
+}
