@@ -1,8 +1,8 @@
 //! The command-line surface.
 
 use crate::commands::{
-    bench, calibrate, check, compare, diagnose, fit, laws, project_report, reduce, rsm, run, sweep,
-    synth,
+    bench, calibrate, check, compare, diagnose, fit, laws, next, project_report, reduce, rsm, run,
+    sweep, synth,
 };
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -37,6 +37,9 @@ pub enum Command {
     /// Which candidate effect ([candidates] in the model file) explains the residuals: a
     /// score test per candidate after what the free parameters absorb.
     Diagnose(diagnose::DiagnoseArgs),
+    /// Which measurement would tell apart the candidates a diagnosis could not: ranks a
+    /// menu of tests and conditions by the T-optimal criterion; writes conditions.csv.
+    Next(next::NextArgs),
     /// Every compare run of a project as a history: errors per model version, the plots
     /// side by side, one offline HTML page.
     Report(project_report::ReportArgs),
@@ -76,6 +79,7 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Synth(args) => synth::synth(&args, out),
         Command::Report(args) => project_report::report(&args, out),
         Command::Diagnose(args) => diagnose::diagnose(&args, out),
+        Command::Next(args) => next::next(&args, out),
         Command::Fit(args) => fit::fit(&args, out),
     }
 }

@@ -54,7 +54,7 @@ pub struct CompareArgs {
 
 /// How the lab tests' runs are made: the options `compare`, `diagnose`, `fit` and `synth`
 /// share, with one meaning and one help text.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct LabRunArgs {
     /// Each test's coarse preset (bigger particles, less material): quick, not for numbers.
     #[arg(long)]
@@ -338,11 +338,12 @@ pub fn simulate(
         );
     }
     let (plans, group) = plan_tests(rows, how)?;
+    // By position in `rows`: two rows may share a file row (every reading of a conditions row).
     let mut by_row: BTreeMap<usize, (Vec<f64>, Vec<String>)> = BTreeMap::new();
     for (test, plan, dir) in &plans {
         run_generated(plan, dir, &how.lab.dispatch(), how.lab.quiet, stop)?;
         for (i, m) in rows.iter().enumerate().filter(|(_, m)| &m.test == test) {
-            let (sims, problems) = by_row.entry(m.row).or_default();
+            let (sims, problems) = by_row.entry(i).or_default();
             for run in plan.runs.iter().filter(|r| r.std == group[i]) {
                 let s = read_summary(&run_dir(dir, run.id));
                 let v = s.as_ref().and_then(|s| observed(s, &m.observable));
@@ -362,9 +363,8 @@ pub fn simulate(
             }
         }
     }
-    Ok(rows
-        .iter()
-        .map(|m| by_row.remove(&m.row).unwrap_or_default())
+    Ok((0..rows.len())
+        .map(|i| by_row.remove(&i).unwrap_or_default())
         .collect())
 }
 

@@ -11,6 +11,7 @@ pub mod fit;
 pub mod laws;
 pub mod measurements;
 pub mod model_edit;
+pub mod next;
 pub mod project_report;
 pub mod reduce;
 pub mod report;

@@ -1,6 +1,7 @@
 //! `tilth diagnose` end to end at the coarse preset: a candidate that is the free parameter
-//! itself is reported as absorbed (not identifiable, never significant), and the report has
-//! the fields the issue names.
+//! itself is reported as absorbed (not identifiable, never significant), the report has the
+//! fields the issue names, the free parameters are fitted first unless `--no-fit`, the verdict
+//! is written and acted on by `tilth fit --from-diagnosis`, and `tilth next` ranks a menu.
 
 use std::path::{Path, PathBuf};
 
@@ -56,6 +57,10 @@ fn run_diagnose(
         "--quiet",
     ];
     args.extend_from_slice(extra);
+    // The model's own values, not a fit of them, unless a test asks for the fit.
+    if !extra.contains(&"--fit-iterations") {
+        args.push("--no-fit");
+    }
     tilth(&args)
 }
 
@@ -182,5 +187,162 @@ fn param_step_sets_the_free_parameters_finite_difference() {
             "soil-soil.rolling_friction (slopes from finite differences of 20 % of each range)"
         ),
         "{md}"
+    );
+}
+
+/// By default the free parameters are fitted to the data first, and the candidates scored at
+/// the fitted model; the verdict is written with the fields `fit` and `next` read, and
+/// `fit --from-diagnosis` refuses any verdict but `effect`.
+#[test]
+fn the_free_parameters_are_fitted_first_and_the_verdict_is_written() {
+    let (dir, model_path, data) = absorbed_case("diagnose-fit-first", "0.025");
+    let out_dir = dir.join("out");
+    let out = run_diagnose(
+        (&model_path, &data, &out_dir),
+        "capillary,twisting",
+        &["--fit-iterations", "1"],
+    );
+    let json = diagnosis(&out, &out_dir);
+    let fit: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("fit/fit.json")).unwrap()).unwrap();
+    let fitted = json["fitted_model"].as_str().expect("fitted_model");
+    assert!(fitted.ends_with("fit/model.toml"), "{fitted}");
+    // "now" is the fitted model: the start's numbers moved by the fit's offset.
+    let offset = fit["estimate"][0].as_f64().unwrap();
+    let now: Vec<f64> = json["recalibration"][0]["now"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for (n, start) in now.iter().zip([0.188, 0.15, 0.193, 0.338]) {
+        assert!(
+            (n - (start + offset)).abs() < 1e-12,
+            "{now:?} against offset {offset}"
+        );
+    }
+    let v = &json["verdict"];
+    let kind = v["verdict"].as_str().unwrap();
+    assert!(
+        ["effect", "ambiguous", "none_of_the_candidates", "no_effect"].contains(&kind),
+        "{v}"
+    );
+    for field in ["effects", "ambiguous", "encompassing", "misfit"] {
+        assert!(v.get(field).is_some(), "{field} missing in {v}");
+    }
+    assert_eq!(json["rows"].as_array().unwrap().len(), 2, "{json}");
+    assert_eq!(
+        json["columns"]["candidates"]["twisting"]["sensitivity"]
+            .as_array()
+            .unwrap()
+            .len(),
+        2
+    );
+    let md = std::fs::read_to_string(out_dir.join("diagnosis.md")).unwrap();
+    assert!(md.contains("**Verdict: "), "{md}");
+    assert!(md.contains("fitted to these data first"), "{md}");
+    if kind != "effect" {
+        let fit_out = tilth(&[
+            "fit",
+            "--model",
+            model_path.to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+            "--from-diagnosis",
+            out_dir.to_str().unwrap(),
+            "--out",
+            dir.join("fit").to_str().unwrap(),
+            "--coarse",
+            "--quiet",
+        ]);
+        assert!(!fit_out.status.success());
+        let err = String::from_utf8_lossy(&fit_out.stderr);
+        assert!(err.contains(&format!("the verdict is {kind}")), "{err}");
+        assert!(!dir.join("fit/fit.json").exists());
+    }
+}
+
+/// `tilth next` simulates a menu with the diagnosis's variants and ranks it: every option
+/// has a separation per ordered pair of the rivals, best first, and the best is written as
+/// a conditions file that `tilth synth` reads.
+#[test]
+fn next_ranks_a_menu_and_writes_the_best_as_conditions() {
+    let (dir, model_path, data) = absorbed_case("diagnose-next", "0.025");
+    let out_dir = dir.join("out");
+    let out = run_diagnose((&model_path, &data, &out_dir), "capillary,twisting", &[]);
+    diagnosis(&out, &out_dir);
+    let menu = dir.join("menu.csv");
+    std::fs::write(&menu, "test,moisture_pct\nrepose,3\nrepose,9\n").unwrap();
+    let next_dir = dir.join("next");
+    let run = |rivals: &str| {
+        tilth(&[
+            "next",
+            "--diagnosis",
+            out_dir.to_str().unwrap(),
+            "--menu",
+            menu.to_str().unwrap(),
+            "--rivals",
+            rivals,
+            "--out",
+            next_dir.to_str().unwrap(),
+            "--coarse",
+            "--cores",
+            "2",
+            "--quiet",
+        ])
+    };
+    let bad = run("capillary,nothing");
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("nothing is not a candidate"), "{err}");
+    let ok = run("capillary,twisting");
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(next_dir.join("next.json")).unwrap()).unwrap();
+    let options = json["options"].as_array().unwrap();
+    assert_eq!(options.len(), 2, "{json}");
+    let sep: Vec<f64> = options
+        .iter()
+        .map(|o| o["separation"].as_f64().unwrap())
+        .collect();
+    assert!(sep[0] >= sep[1], "{sep:?}");
+    let funnel = [
+        "repose_angle_deg",
+        "heap_cone_angle_deg",
+        "tray_mass_g",
+        "funnel_flow_rate_g_s",
+        "funnel_residue_g",
+    ];
+    for o in options {
+        // Both ways between the two rivals; the funnel test's readings, each once (a
+        // reading that does not scatter, as the residue of a funnel that empties, has no
+        // standard error without --noise and is left out).
+        assert_eq!(o["pairs"].as_array().unwrap().len(), 2, "{o}");
+        let obs: Vec<&str> = (o["observables"].as_array().unwrap().iter())
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        assert!(
+            !obs.is_empty() && obs.iter().all(|x| funnel.contains(x)),
+            "{o}"
+        );
+        let mut unique = obs.clone();
+        unique.dedup();
+        assert_eq!(unique.len(), obs.len(), "{o}");
+    }
+    let conditions = std::fs::read_to_string(next_dir.join("conditions.csv")).unwrap();
+    let best = options[0]["conditions"]["moisture_pct"].as_f64().unwrap();
+    assert!(
+        conditions.starts_with("test,moisture_pct,observable\n"),
+        "{conditions}"
+    );
+    let readings = options[0]["observables"].as_array().unwrap().len();
+    assert_eq!(conditions.lines().count(), 1 + readings, "{conditions}");
+    assert!(
+        conditions.contains(&format!("repose,{best},heap_cone_angle_deg")),
+        "{conditions}"
     );
 }

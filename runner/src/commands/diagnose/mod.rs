@@ -68,6 +68,13 @@ pub struct DiagnoseArgs {
     /// not been fitted to the data.
     #[arg(long, default_value_t = 0.05)]
     pub param_step: f64,
+    /// Diagnose the model as it is: do not fit the free parameters to the data first (for
+    /// a model already fitted to them).
+    #[arg(long)]
+    pub no_fit: bool,
+    /// Levenberg-Marquardt iterations, at most, of that fit (see `tilth fit`).
+    #[arg(long, default_value_t = 3)]
+    pub fit_iterations: usize,
     /// Corrected p-value below which a candidate is called significant.
     #[arg(long, default_value_t = 0.01)]
     pub alpha: f64,
@@ -127,6 +134,77 @@ fn parse_probe(s: &str) -> Result<(String, f64)> {
     Ok((path.trim().to_string(), step))
 }
 
+/// Fits the free parameters to the rows with `tilth fit` into `DIR/fit/` and returns the
+/// fitted model's path; None without free parameters or with `--no-fit`.
+fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Option<PathBuf>> {
+    if args.params.is_empty() || args.no_fit {
+        return Ok(None);
+    }
+    let dir = args.out.join("fit");
+    std::fs::create_dir_all(&dir)?;
+    let data = if args.tests.is_empty() {
+        args.data.clone()
+    } else {
+        let only = dir.join("data.csv");
+        super::measurements::write_measurements(&only, rows)?;
+        only
+    };
+    if !args.lab.quiet {
+        eprintln!(
+            "fitting the free parameters to the data first (--no-fit to skip): {}",
+            dir.display()
+        );
+    }
+    let fit = super::fit::FitArgs {
+        model: args.model.clone(),
+        data,
+        params: args.params.clone(),
+        from_diagnosis: None,
+        replicates: args.replicates,
+        iterations: args.fit_iterations,
+        to_minimum: false,
+        out: dir.clone(),
+        lab: args.lab.clone(),
+    };
+    super::fit::fit(&fit, &mut std::io::sink())?;
+    Ok(Some(std::path::absolute(dir.join("model.toml"))?))
+}
+
+/// What the fit before the diagnosis moved: each free parameter's shift from the model's
+/// value with its standard error, and chi^2 before and after.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitFirst {
+    pub parameters: Vec<String>,
+    pub shift: Vec<f64>,
+    pub standard_error: Vec<Option<f64>>,
+    pub chi2_start: f64,
+    pub chi2: f64,
+    pub dof: f64,
+}
+
+fn fit_summary(dir: &std::path::Path) -> Result<FitFirst> {
+    let path = dir.join("fit/fit.json");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&path)?)?;
+    let nums = |v: &serde_json::Value| -> Vec<Option<f64>> {
+        v.as_array()
+            .map(|a| a.iter().map(serde_json::Value::as_f64).collect())
+            .unwrap_or_default()
+    };
+    Ok(FitFirst {
+        parameters: (j["parameters"].as_array().into_iter().flatten())
+            .map(|p| p["label"].as_str().unwrap_or_default().to_string())
+            .collect(),
+        shift: nums(&j["estimate"])
+            .into_iter()
+            .map(|x| x.unwrap_or(0.0))
+            .collect(),
+        standard_error: nums(&j["standard_error"]),
+        chi2_start: j["history"][0]["chi2"].as_f64().unwrap_or(f64::NAN),
+        chi2: j["chi2"].as_f64().unwrap_or(f64::NAN),
+        dof: j["dof"].as_f64().unwrap_or(f64::NAN),
+    })
+}
+
 /// Every candidate asked for exists in the model file with a usable step and strength.
 fn check_candidates(names: &[String], model: &Model, path: &std::path::Path) -> Result<()> {
     if names.is_empty() {
@@ -177,6 +255,9 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     if !(args.alpha > 0.0 && args.alpha < 1.0) {
         bail!("--alpha {} is out of range: allowed (0, 1)", args.alpha);
     }
+    if args.fit_iterations == 0 {
+        bail!("--fit-iterations 0 is out of range: allowed 1 or more (or --no-fit)");
+    }
     if !(args.param_step > 0.0 && args.param_step <= 0.5) {
         bail!(
             "--param-step {} is out of range: allowed (0, 0.5], a fraction of each --param's range",
@@ -210,6 +291,17 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         .iter()
         .map(|p| parse_probe(p))
         .collect::<Result<_>>()?;
+    // The restricted estimate: the candidates are scored where the model without them fits
+    // the data best, so a miscalibrated free parameter is taken out by its fit, not by a
+    // linear extrapolation from the model's start.
+    let (model, text, fitted) = match fit_first(args, &rows)? {
+        Some(path) => (
+            Model::load(&path)?,
+            std::fs::read_to_string(&path)?,
+            Some(path),
+        ),
+        None => (model, text, None),
+    };
 
     // The variants, written and checked before any run.
     let models_dir = args.out.join("models");
@@ -388,6 +480,10 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             sensitivity_var: sens_var(2 + params.len() + k),
         })
         .collect();
+    let fit_first = match &fitted {
+        Some(_) => Some(fit_summary(&args.out)?),
+        None => None,
+    };
     let scores = score_tests(&residual, &x, &jacobian_noise, &candidates);
     let verdict = tilth_tools::diagnose::verdict::verdict(
         &residual,
@@ -466,6 +562,8 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "alpha": args.alpha,
         "free_parameters": params,
         "param_step": args.param_step,
+        "fitted_model": fitted.as_ref().map(|p| p.display().to_string()),
+        "fit_first": fit_first,
         "rows_used": m,
         "rows_dropped": dropped,
         "rmse_now": now,
@@ -503,6 +601,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         &recalibrated,
         &dropped,
         &verdict,
+        fit_first.as_ref(),
     );
     std::fs::write(args.out.join("diagnosis.md"), &md)?;
     out.write_all(md.as_bytes())?;

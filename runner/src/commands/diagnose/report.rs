@@ -1,7 +1,7 @@
 //! `diagnosis.md`: the ranking, the verdict and the recalibration in words.
 
 use super::HELD;
-use super::{DiagnoseArgs, Diagnosed, Recalibrated};
+use super::{DiagnoseArgs, Diagnosed, FitFirst, Recalibrated};
 use crate::commands::calibrate::Param;
 use std::collections::BTreeMap;
 use tilth_tools::compare::p_text;
@@ -17,6 +17,7 @@ pub(super) fn report(
     recalibrated: &[Recalibrated],
     dropped: &[String],
     verdict: &Verdict,
+    fit_first: Option<&FitFirst>,
 ) -> String {
     let mut md = format!(
         "# Diagnosis of {} against {}\n\n",
@@ -42,6 +43,26 @@ pub(super) fn report(
         if args.replicates == 1 { "" } else { "s" },
         args.alpha
     );
+    if let Some(f) = fit_first {
+        md += &format!(
+            "The free parameters were fitted to these data first (`{}/fit/fit.md`): {}; chi^2 {:.1} before, {:.1} after, on {} degrees of freedom. The candidates are scored at the fitted values (the restricted estimate of the score test), and \"now\" below is the fitted model. An effect that the free parameters mimic on these readings is absorbed by that fit: `--no-fit` scores the candidates against the model as it was.\n\n",
+            args.out.display(),
+            f.parameters
+                .iter()
+                .zip(&f.shift)
+                .zip(&f.standard_error)
+                .map(|((p, s), e)| match e {
+                    Some(e) if *e > 0.0 =>
+                        format!("{p} moved {s:+.4} ({:.1} standard errors)", s / e),
+                    _ => format!("{p} moved {s:+.4}"),
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+            f.chi2_start,
+            f.chi2,
+            f.dof
+        );
+    }
     for (k, v) in now {
         md += &format!(
             "- {k}: RMSE now {v:.4}; what recalibrating the free parameters alone would leave: {:.4}\n",
