@@ -29,7 +29,10 @@ use std::io::Write;
 use std::path::PathBuf;
 use tilth_tools::diagnose::{Candidate, JacobianNoise, Score, score_tests};
 
+mod fit_first;
 mod report;
+
+use fit_first::{fit_first, fit_summary};
 
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -126,83 +129,12 @@ fn parse_probe(s: &str) -> Result<(String, f64)> {
     let step: f64 = step.trim().parse().map_err(|_| {
         anyhow::anyhow!("--probe {s:?}: expected PAIR.KEY=STEP, e.g. soil-soil.surface_energy=0.05")
     })?;
-    if !(step.is_finite() && step != 0.0) || !path.contains('.') {
+    if !(step.is_finite() && step != 0.0 && path.contains('.')) {
         bail!(
             "--probe {s:?}: STEP {step} is out of range: allowed a non-zero number, with PAIR.KEY before it"
         );
     }
     Ok((path.trim().to_string(), step))
-}
-
-/// Fits the free parameters to the rows with `tilth fit` into `DIR/fit/` and returns the
-/// fitted model's path; None without free parameters or with `--no-fit`.
-fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Option<PathBuf>> {
-    if args.params.is_empty() || args.no_fit {
-        return Ok(None);
-    }
-    let dir = args.out.join("fit");
-    std::fs::create_dir_all(&dir)?;
-    let data = if args.tests.is_empty() {
-        args.data.clone()
-    } else {
-        let only = dir.join("data.csv");
-        super::measurements::write_measurements(&only, rows)?;
-        only
-    };
-    if !args.lab.quiet {
-        eprintln!(
-            "fitting the free parameters to the data first (--no-fit to skip): {}",
-            dir.display()
-        );
-    }
-    let fit = super::fit::FitArgs {
-        model: args.model.clone(),
-        data,
-        params: args.params.clone(),
-        from_diagnosis: None,
-        replicates: args.replicates,
-        iterations: args.fit_iterations,
-        to_minimum: false,
-        out: dir.clone(),
-        lab: args.lab.clone(),
-    };
-    super::fit::fit(&fit, &mut std::io::sink())?;
-    Ok(Some(std::path::absolute(dir.join("model.toml"))?))
-}
-
-/// What the fit before the diagnosis moved: each free parameter's shift from the model's
-/// value with its standard error, and chi^2 before and after.
-#[derive(Debug, Clone, Serialize)]
-pub struct FitFirst {
-    pub parameters: Vec<String>,
-    pub shift: Vec<f64>,
-    pub standard_error: Vec<Option<f64>>,
-    pub chi2_start: f64,
-    pub chi2: f64,
-    pub dof: f64,
-}
-
-fn fit_summary(dir: &std::path::Path) -> Result<FitFirst> {
-    let path = dir.join("fit/fit.json");
-    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&path)?)?;
-    let nums = |v: &serde_json::Value| -> Vec<Option<f64>> {
-        v.as_array()
-            .map(|a| a.iter().map(serde_json::Value::as_f64).collect())
-            .unwrap_or_default()
-    };
-    Ok(FitFirst {
-        parameters: (j["parameters"].as_array().into_iter().flatten())
-            .map(|p| p["label"].as_str().unwrap_or_default().to_string())
-            .collect(),
-        shift: nums(&j["estimate"])
-            .into_iter()
-            .map(|x| x.unwrap_or(0.0))
-            .collect(),
-        standard_error: nums(&j["standard_error"]),
-        chi2_start: j["history"][0]["chi2"].as_f64().unwrap_or(f64::NAN),
-        chi2: j["chi2"].as_f64().unwrap_or(f64::NAN),
-        dof: j["dof"].as_f64().unwrap_or(f64::NAN),
-    })
 }
 
 /// Every candidate asked for exists in the model file with a usable step and strength.
@@ -594,14 +526,16 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     )?;
     let md = report::report(
         args,
-        &params,
-        &diagnosed,
-        &now,
-        &before,
-        &recalibrated,
-        &dropped,
-        &verdict,
-        fit_first.as_ref(),
+        &report::Findings {
+            params: &params,
+            diagnosed: &diagnosed,
+            now: &now,
+            before: &before,
+            recalibrated: &recalibrated,
+            dropped: &dropped,
+            verdict: &verdict,
+            fit_first: fit_first.as_ref(),
+        },
     );
     std::fs::write(args.out.join("diagnosis.md"), &md)?;
     out.write_all(md.as_bytes())?;

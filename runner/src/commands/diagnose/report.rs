@@ -1,24 +1,37 @@
 //! `diagnosis.md`: the ranking, the verdict and the recalibration in words.
 
 use super::HELD;
-use super::{DiagnoseArgs, Diagnosed, FitFirst, Recalibrated};
+use super::fit_first::FitFirst;
+use super::{DiagnoseArgs, Diagnosed, Recalibrated};
 use crate::commands::calibrate::Param;
 use std::collections::BTreeMap;
 use tilth_tools::compare::p_text;
 use tilth_tools::diagnose::Unidentified;
 use tilth_tools::diagnose::verdict::{Kind, Verdict};
 
-pub(super) fn report(
-    args: &DiagnoseArgs,
-    params: &[Param],
-    d: &[Diagnosed],
-    now: &BTreeMap<String, f64>,
-    before: &BTreeMap<String, f64>,
-    recalibrated: &[Recalibrated],
-    dropped: &[String],
-    verdict: &Verdict,
-    fit_first: Option<&FitFirst>,
-) -> String {
+/// Everything `diagnosis.md` reports.
+pub(super) struct Findings<'a> {
+    pub params: &'a [Param],
+    pub diagnosed: &'a [Diagnosed],
+    pub now: &'a BTreeMap<String, f64>,
+    pub before: &'a BTreeMap<String, f64>,
+    pub recalibrated: &'a [Recalibrated],
+    pub dropped: &'a [String],
+    pub verdict: &'a Verdict,
+    pub fit_first: Option<&'a FitFirst>,
+}
+
+pub(super) fn report(args: &DiagnoseArgs, f: &Findings) -> String {
+    let Findings {
+        params,
+        diagnosed: d,
+        now,
+        before,
+        recalibrated,
+        dropped,
+        verdict,
+        fit_first,
+    } = *f;
     let mut md = format!(
         "# Diagnosis of {} against {}\n\n",
         args.model.display(),
@@ -189,44 +202,6 @@ fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
     md
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn param(within_range: bool, measurable: bool) -> Recalibrated {
-        Recalibrated {
-            parameter: "soil-soil.rolling_friction".into(),
-            now: vec![0.2, 0.3],
-            shift: 0.5,
-            after: vec![0.7, 0.8],
-            range: [0.05, 0.45],
-            within_range,
-            measurable,
-        }
-    }
-
-    #[test]
-    fn an_extrapolated_recalibration_is_named_as_one() {
-        let ok = recalibration_table(&[param(true, true)]);
-        assert!(ok.contains("| soil-soil.rolling_friction | 0.2000, 0.3000 | +0.5000 | 0.7000, 0.8000 | 0.05 .. 0.45 |"), "{ok}");
-        assert!(!ok.contains("extrapolation"), "{ok}");
-        let out = recalibration_table(&[param(false, true)]);
-        assert!(
-            out.contains("leaves its range") && out.contains("outside the range"),
-            "{out}"
-        );
-        let flat = recalibration_table(&[param(true, false)]);
-        assert!(
-            flat.contains("no measurable effect") && flat.contains("fitted to noise"),
-            "{flat}"
-        );
-        // And the candidates' tests could not take its misfit out: the report says so.
-        let stand_in = "may stand for soil-soil.rolling_friction";
-        assert!(flat.contains(stand_in), "{flat}");
-        assert!(!ok.contains(stand_in) && !out.contains(stand_in), "{out}");
-    }
-}
-
 /// A candidate's name as a reader should see it: a held parameter is not an effect.
 fn called(name: &str) -> String {
     match name.strip_prefix(HELD) {
@@ -344,4 +319,42 @@ pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
         }
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn param(within_range: bool, measurable: bool) -> Recalibrated {
+        Recalibrated {
+            parameter: "soil-soil.rolling_friction".into(),
+            now: vec![0.2, 0.3],
+            shift: 0.5,
+            after: vec![0.7, 0.8],
+            range: [0.05, 0.45],
+            within_range,
+            measurable,
+        }
+    }
+
+    #[test]
+    fn an_extrapolated_recalibration_is_named_as_one() {
+        let ok = recalibration_table(&[param(true, true)]);
+        assert!(ok.contains("| soil-soil.rolling_friction | 0.2000, 0.3000 | +0.5000 | 0.7000, 0.8000 | 0.05 .. 0.45 |"), "{ok}");
+        assert!(!ok.contains("extrapolation"), "{ok}");
+        let out = recalibration_table(&[param(false, true)]);
+        assert!(
+            out.contains("leaves its range") && out.contains("outside the range"),
+            "{out}"
+        );
+        let flat = recalibration_table(&[param(true, false)]);
+        assert!(
+            flat.contains("no measurable effect") && flat.contains("fitted to noise"),
+            "{flat}"
+        );
+        // And the candidates' tests could not take its misfit out: the report says so.
+        let stand_in = "may stand for soil-soil.rolling_friction";
+        assert!(flat.contains(stand_in), "{flat}");
+        assert!(!ok.contains(stand_in) && !out.contains(stand_in), "{out}");
+    }
 }

@@ -32,6 +32,9 @@ use std::path::{Path, PathBuf};
 use tilth_tools::diagnose::discriminate::{Rows, Separation, separations, worst};
 use tilth_tools::diagnose::verdict::Kind;
 
+mod report;
+use report::{report, write_conditions};
+
 #[derive(Debug, Args)]
 pub struct NextArgs {
     /// A `tilth diagnose` output directory (diagnosis.json and models/).
@@ -139,39 +142,7 @@ struct Variant {
 pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     let path = args.diagnosis.join("diagnosis.json");
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("--diagnosis: cannot read {}", path.display()))?;
-    let d: Diagnosis = serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: not a diagnosis with a verdict and columns (written by `tilth diagnose` of this version?)",
-            path.display()
-        )
-    })?;
-    if d.coarse != args.lab.coarse {
-        bail!(
-            "{} was made {} the coarse preset: run `tilth next` {} --coarse, so the new rows are simulated as the old",
-            path.display(),
-            if d.coarse { "at" } else { "without" },
-            if d.coarse { "with" } else { "without" }
-        );
-    }
-    if args.specimens == 0 || args.top == 0 {
-        bail!("--specimens and --top: allowed 1 or more");
-    }
-    let rivals: Vec<String> = if args.rivals.is_empty() {
-        if d.verdict.verdict != Kind::Ambiguous {
-            bail!(
-                "{}: the verdict is not ambiguous, so there are no rivals to separate; name some with --rivals A,B",
-                path.display()
-            );
-        }
-        d.verdict.ambiguous.clone()
-    } else {
-        args.rivals.clone()
-    };
-    if rivals.len() < 2 {
-        bail!("--rivals: allowed two or more candidates, got {rivals:?}");
-    }
+    let (d, rivals) = load(args, &path)?;
     let model = Model::load(&std::path::absolute(&d.model)?)?;
     let variants = variants_of(&d, &model, &args.diagnosis, &rivals)?;
     let menu = read_menu(&args.menu)?;
@@ -226,35 +197,21 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
         .collect::<Result<_>>()?;
     let p = d.free_parameters.len();
     let baseline = separations(&old, &rivals, &strengths, d.alpha);
-    let mut options = vec![];
-    for (test, conditions, members) in group(&menu) {
-        let measured = Measured {
-            values: &values,
-            variants: &variants,
-            replicates: r,
-            params: p,
-            noise: &noise,
-            specimens: args.specimens,
-        };
-        let (rows, kept) = measured.rows(&menu, &members, rivals.len());
-        if kept.is_empty() {
-            eprintln!(
-                "{test} at {conditions:?}: no reading could be scored (a run failed, or no reading scatters and --noise gives none); left out"
-            );
-            continue;
-        }
-        let pairs = separations(&old.stack(&rows), &rivals, &strengths, d.alpha);
-        let w = worst(&pairs).expect("two rivals or more").clone();
-        options.push(Suggestion {
-            test: test.clone(),
-            observables: kept.iter().map(|&i| menu[i].observable.clone()).collect(),
-            conditions: conditions.clone(),
-            separation: w.noncentrality - w.noise,
-            power: w.power,
-            pairs,
-            runs: (2 + p + d.candidates.len()) * r,
-        });
-    }
+    let measured = Measured {
+        values: &values,
+        variants: &variants,
+        replicates: r,
+        params: p,
+        noise: &noise,
+        specimens: args.specimens,
+    };
+    let rivals_at = Rivals {
+        names: &rivals,
+        strengths: &strengths,
+        alpha: d.alpha,
+    };
+    let runs = (2 + p + d.candidates.len()) * r;
+    let mut options = score(&menu, &measured, &old, &rivals_at, runs);
     if options.is_empty() {
         bail!(
             "{}: no measurement of the menu could be scored",
@@ -292,6 +249,90 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
         args.out.display()
     )?;
     Ok(())
+}
+
+/// The diagnosis in `path`, checked against the options, and the rivals to separate.
+fn load(args: &NextArgs, path: &Path) -> Result<(Diagnosis, Vec<String>)> {
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("--diagnosis: cannot read {}", path.display()))?;
+    let d: Diagnosis = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not a diagnosis with a verdict and columns (written by `tilth diagnose` of this version?)",
+            path.display()
+        )
+    })?;
+    if d.coarse != args.lab.coarse {
+        bail!(
+            "{} was made {} the coarse preset: run `tilth next` {} --coarse, so the new rows are simulated as the old",
+            path.display(),
+            if d.coarse { "at" } else { "without" },
+            if d.coarse { "with" } else { "without" }
+        );
+    }
+    if args.specimens == 0 || args.top == 0 {
+        bail!("--specimens and --top: allowed 1 or more");
+    }
+    let rivals: Vec<String> = if args.rivals.is_empty() {
+        if d.verdict.verdict != Kind::Ambiguous {
+            bail!(
+                "{}: the verdict is not ambiguous, so there are no rivals to separate; name some with --rivals A,B",
+                path.display()
+            );
+        }
+        d.verdict.ambiguous.clone()
+    } else {
+        args.rivals.clone()
+    };
+    if rivals.len() < 2 {
+        bail!("--rivals: allowed two or more candidates, got {rivals:?}");
+    }
+    Ok((d, rivals))
+}
+
+/// The rivals, each at its estimated strength, and the level of the tests between them.
+struct Rivals<'a> {
+    names: &'a [String],
+    strengths: &'a [f64],
+    alpha: f64,
+}
+
+/// Every measurement of the menu (its readings grouped by test and conditions), added in
+/// turn to the diagnosed rows `old` and scored by the hardest pair's separation; `runs` is
+/// what a diagnosis with it costs per measurement.
+fn score(
+    menu: &[Measurement],
+    measured: &Measured,
+    old: &Rows,
+    rivals: &Rivals,
+    runs: usize,
+) -> Vec<Suggestion> {
+    let mut options = vec![];
+    for (test, conditions, members) in group(menu) {
+        let (rows, kept) = measured.rows(menu, &members, rivals.names.len());
+        if kept.is_empty() {
+            eprintln!(
+                "{test} at {conditions:?}: no reading could be scored (a run failed, or no reading scatters and --noise gives none); left out"
+            );
+            continue;
+        }
+        let pairs = separations(
+            &old.stack(&rows),
+            rivals.names,
+            rivals.strengths,
+            rivals.alpha,
+        );
+        let w = worst(&pairs).expect("two rivals or more").clone();
+        options.push(Suggestion {
+            observables: kept.iter().map(|&i| menu[i].observable.clone()).collect(),
+            test,
+            conditions,
+            separation: w.noncentrality - w.noise,
+            power: w.power,
+            pairs,
+            runs,
+        });
+    }
+    options
 }
 
 /// The menu's runs, every variant's, and how a new reading is standardised.
@@ -473,107 +514,4 @@ fn group(menu: &[Measurement]) -> Vec<(String, BTreeMap<String, f64>, Vec<usize>
         }
     }
     out
-}
-
-/// The options as a conditions file: test, every condition any of them uses, observable.
-fn write_conditions(path: &Path, options: &[Suggestion]) -> Result<()> {
-    let names: Vec<&String> = {
-        let mut n: Vec<&String> = options.iter().flat_map(|o| o.conditions.keys()).collect();
-        n.sort();
-        n.dedup();
-        n
-    };
-    let mut text = format!(
-        "test,{},observable\n",
-        names
-            .iter()
-            .map(|s| s.as_str())
-            .collect::<Vec<_>>()
-            .join(",")
-    );
-    for o in options {
-        for obs in &o.observables {
-            let cells: Vec<String> = names
-                .iter()
-                .map(|n| {
-                    o.conditions
-                        .get(*n)
-                        .map_or(String::new(), |v| v.to_string())
-                })
-                .collect();
-            text += &format!("{},{},{obs}\n", o.test, cells.join(","));
-        }
-    }
-    std::fs::write(path, text)?;
-    Ok(())
-}
-
-fn report(
-    args: &NextArgs,
-    rivals: &[String],
-    strengths: &[f64],
-    now: Option<&Separation>,
-    options: &[Suggestion],
-) -> String {
-    let mut md = format!(
-        "# The next measurement: telling {} apart\n\nEach rival at its estimated strength ({}). The score of a measurement is the noncentrality of the test that would reject the wrong rival, for the pair hardest to tell apart once it is added, less what the finite differences' noise brings; the power is that test's at the diagnosis's alpha. {} specimen{} per measurement; the lab's noise {}.\n\n",
-        rivals.join(", "),
-        rivals
-            .iter()
-            .zip(strengths)
-            .map(|(n, s)| format!("{n} {s:.4}"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        args.specimens,
-        if args.specimens == 1 { "" } else { "s" },
-        if args.noise.is_empty() {
-            "taken as the runs' own scatter".to_string()
-        } else {
-            args.noise.clone()
-        }
-    );
-    if let Some(w) = now {
-        md += &format!(
-            "Now: {} against {} is the hardest pair, separation {:.2} (power {:.2}).\n\n",
-            w.truth,
-            w.rival,
-            w.noncentrality - w.noise,
-            w.power
-        );
-    }
-    md += "| rank | test | conditions | readings | separation | power | hardest pair | runs |\n|---|---|---|---|---|---|---|---|\n";
-    for (k, o) in options.iter().enumerate() {
-        let w = worst(&o.pairs).expect("pairs");
-        md += &format!(
-            "| {} | {} | {} | {} | {:.2} | {:.2} | {} vs {} | {} |\n",
-            k + 1,
-            o.test,
-            o.conditions
-                .iter()
-                .map(|(c, v)| format!("{c} {v}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            o.observables.len(),
-            o.separation,
-            o.power,
-            w.truth,
-            w.rival,
-            o.runs
-        );
-    }
-    let best = &options[0];
-    md += &format!(
-        "\nMeasure **{} at {}** next: `conditions.csv` holds it. Add the measurements to the data and diagnose again.",
-        best.test,
-        best.conditions
-            .iter()
-            .map(|(c, v)| format!("{c} {v}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    if best.power < 0.5 {
-        md += " Even this one is more likely than not to leave them ambiguous: measure it with more specimens, or several of the list.";
-    }
-    md += "\n";
-    md
 }

@@ -1,0 +1,109 @@
+//! `next.md` and `conditions.csv`: the ranking in words and the best as a conditions file.
+
+use super::{NextArgs, Suggestion};
+use anyhow::Result;
+use std::path::Path;
+use tilth_tools::diagnose::discriminate::{Separation, worst};
+
+/// The options as a conditions file: test, every condition any of them uses, observable.
+pub(super) fn write_conditions(path: &Path, options: &[Suggestion]) -> Result<()> {
+    let names: Vec<&String> = {
+        let mut n: Vec<&String> = options.iter().flat_map(|o| o.conditions.keys()).collect();
+        n.sort();
+        n.dedup();
+        n
+    };
+    let mut text = format!(
+        "test,{},observable\n",
+        names
+            .iter()
+            .map(|s| s.as_str())
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    for o in options {
+        for obs in &o.observables {
+            let cells: Vec<String> = names
+                .iter()
+                .map(|n| {
+                    o.conditions
+                        .get(*n)
+                        .map_or(String::new(), |v| v.to_string())
+                })
+                .collect();
+            text += &format!("{},{},{obs}\n", o.test, cells.join(","));
+        }
+    }
+    std::fs::write(path, text)?;
+    Ok(())
+}
+
+pub(super) fn report(
+    args: &NextArgs,
+    rivals: &[String],
+    strengths: &[f64],
+    now: Option<&Separation>,
+    options: &[Suggestion],
+) -> String {
+    let mut md = format!(
+        "# The next measurement: telling {} apart\n\nEach rival at its estimated strength ({}). The score of a measurement is the noncentrality of the test that would reject the wrong rival, for the pair hardest to tell apart once it is added, less what the finite differences' noise brings; the power is that test's at the diagnosis's alpha. {} specimen{} per measurement; the lab's noise {}.\n\n",
+        rivals.join(", "),
+        rivals
+            .iter()
+            .zip(strengths)
+            .map(|(n, s)| format!("{n} {s:.4}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        args.specimens,
+        if args.specimens == 1 { "" } else { "s" },
+        if args.noise.is_empty() {
+            "taken as the runs' own scatter".to_string()
+        } else {
+            args.noise.clone()
+        }
+    );
+    if let Some(w) = now {
+        md += &format!(
+            "Now: {} against {} is the hardest pair, separation {:.2} (power {:.2}).\n\n",
+            w.truth,
+            w.rival,
+            w.noncentrality - w.noise,
+            w.power
+        );
+    }
+    md += "| rank | test | conditions | readings | separation | power | hardest pair | runs |\n|---|---|---|---|---|---|---|---|\n";
+    for (k, o) in options.iter().enumerate() {
+        let w = worst(&o.pairs).expect("pairs");
+        md += &format!(
+            "| {} | {} | {} | {} | {:.2} | {:.2} | {} vs {} | {} |\n",
+            k + 1,
+            o.test,
+            o.conditions
+                .iter()
+                .map(|(c, v)| format!("{c} {v}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            o.observables.len(),
+            o.separation,
+            o.power,
+            w.truth,
+            w.rival,
+            o.runs
+        );
+    }
+    let best = &options[0];
+    md += &format!(
+        "\nMeasure **{} at {}** next: `conditions.csv` holds it. Add the measurements to the data and diagnose again.",
+        best.test,
+        best.conditions
+            .iter()
+            .map(|(c, v)| format!("{c} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if best.power < 0.5 {
+        md += " Even this one is more likely than not to leave them ambiguous: measure it with more specimens, or several of the list.";
+    }
+    md += "\n";
+    md
+}
