@@ -253,7 +253,7 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
 
 /// The diagnosis in `path`, checked against the options, and the rivals to separate.
 fn load(args: &NextArgs, path: &Path) -> Result<(Diagnosis, Vec<String>)> {
-    let text = std::fs::read_to_string(&path)
+    let text = std::fs::read_to_string(path)
         .with_context(|| format!("--diagnosis: cannot read {}", path.display()))?;
     let d: Diagnosis = serde_json::from_str(&text).with_context(|| {
         format!(
