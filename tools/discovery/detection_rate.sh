@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# How often `diagnose` finds a hidden effect, over draws of the data (docs/discovery.md, "How
+# How often `diagnose` finds a hidden effect, over draws of the data (docs/discovery-proof.md, "How
 # often a hidden effect is ranked first"): for each SEED, `tilth synth` hides EFFECT at
 # STRENGTH in the truth and draws the data with that seed, then `tilth diagnose` ranks the
 # candidates, exactly as tools/discovery/hidden_effect.sh does (same conditions, replicates,

@@ -21,7 +21,7 @@ Printed per step size (a fraction of each range): each parameter's bias and RMSE
 truth, the exact standard deviation (from the exact Jacobian at the truth), how often the
 95 % interval (estimate +- 1.96 standard errors) holds the truth with either standard error
 (the corrected one over the fits it determines), and how often it determines none.
-docs/discovery.md ("`fit`'s standard errors") gives the result.
+docs/discovery-proof.md ("`fit`'s standard errors") gives the result.
 """
 import argparse
 

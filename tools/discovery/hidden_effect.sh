@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The discovery loop on data with a hidden effect, at the coarse preset (docs/discovery.md,
+# The discovery loop on data with a hidden effect, at the coarse preset (docs/discovery-proof.md,
 # "The proof"): hide candidate EFFECT at STRENGTH in the truth, make funnel-test data from
 # it, compare the model (which lacks it), diagnose, fit the model with the top candidate's
 # strength free, compare again, and write the project's report.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The discovery loop's false-alarm rate (docs/discovery.md, "No hidden effect"): data made by
+# The discovery loop's false-alarm rate (docs/discovery-proof.md, "No hidden effect"): data made by
 # the model itself (truth = model + noise) for SEEDS seeds, each diagnosed; counts the seeds
 # in which some candidate is called significant. The model's runs are the same for every
 # seed and come from one cache (--cache), so each seed costs only its truth runs.
@@ -10,7 +10,7 @@
 # Environment: TILTH, MODEL, SCALE, LAB, R, NOISE, FREE as in hidden_effect.sh; CACHE (default
 # OUT/cache); SHIFT=PAIR.KEY=DELTA (optional) moves a parameter of the truth (`tilth synth
 # --shift`), so that the model is off where FREE can absorb it, with no effect hidden
-# (docs/discovery.md, "A free parameter off"):
+# (docs/discovery-proof.md, "A free parameter off"):
 #
 #   SHIFT=soil-soil.rolling_friction=0.05 tools/discovery/null_study.sh runs/null-off 20
 #

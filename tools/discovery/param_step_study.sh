@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Diagnoses every draw of a finished discovery proof again with another free-parameter step
-# (docs/discovery.md, "The free parameters' step in `diagnose`"): the proof's hidden-effect
+# (docs/discovery-proof.md, "The free parameters' step in `diagnose`"): the proof's hidden-effect
 # draws (PROOF/rate-*/seed*) and null seeds (PROOF/null/seed-*), each into SUB beside its
 # own diagnosis, with `--param-step STEP` and the proof's settings, sharing the proof's run
 # cache, so that only the free parameter's runs are new. Then summarise with

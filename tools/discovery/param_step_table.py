@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The table of docs/discovery.md, "The free parameters' step in `diagnose`": for each
+"""The table of docs/discovery-proof.md, "The free parameters' step in `diagnose`": for each
 diagnosis sub-directory of a finished discovery proof (one per free-parameter step), how often
 each hidden effect is ranked first and significant, how many null seeds have a significant
 candidate, how often the free parameter is `measurable`, and the mean recalibration shift and

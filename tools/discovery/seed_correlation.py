@@ -9,7 +9,7 @@ between two conditions over the replicates, sum_k z_a,k z_b,k / (R - 1), average
 pair of conditions. Near 0: the conditions' runs are independent draws, and a row's
 simulation error averages out across rows. Near 1: replicate k shifts every condition
 alike, so R runs per condition carry one common error that no number of conditions averages
-out (docs/discovery.md, "The stop rule and the seeds").
+out (docs/discovery-proof.md, "The stop rule and the seeds").
 """
 
 from __future__ import annotations

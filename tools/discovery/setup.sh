@@ -4,7 +4,7 @@
 tilth=${TILTH:-target/release/tilth}
 # Replicates: R model runs per setting in diagnose and fit; R_DATA truth runs averaged into
 # each synthetic value and R_JUDGE model runs per condition in the two compares (both R unless
-# set: docs/discovery.md, "Judged against the injected noise alone", sets them to 16).
+# set: docs/discovery-proof.md, "Judged against the injected noise alone", sets them to 16).
 R=${R:-4}
 R_DATA=${R_DATA:-$R}
 R_JUDGE=${R_JUDGE:-$R}
@@ -22,7 +22,7 @@ LAB=${LAB:-}
 cache=${CACHE:-$out/cache}
 # The moisture levels (%, space-separated). More levels make each reading's RMSE a steadier
 # number: over n rows a model that is the truth itself exceeds 1.5x the noise with the chance
-# P(chi^2_n > 2.25 n), 6 % at n = 4 and 3 % at n = 7 (docs/discovery.md).
+# P(chi^2_n > 2.25 n), 6 % at n = 4 and 3 % at n = 7 (docs/discovery-proof.md, "Judged against the injected noise alone").
 LEVELS=${LEVELS:-3 6 9 12}
 mkdir -p "$out"
 {

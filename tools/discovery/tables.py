@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The discovery proof's tables (docs/discovery.md, "The proof") from its output directory.
+"""The discovery proof's tables (docs/discovery-proof.md, "The proof") from its output directory.
 
     python3 tools/discovery/tables.py DIR [NOISE]
     python3 tools/discovery/tables.py --one OUT [NOISE]

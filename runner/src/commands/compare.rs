@@ -304,7 +304,7 @@ pub struct Simulate<'a> {
 /// all conditions together: with R runs per condition the rows' simulation errors were
 /// correlated (0.8 across moisture levels for the flow rate with fines on), which rows
 /// treated as independent cannot average out (the seven-level fine-fraction fit ended 3.3
-/// of its standard errors short; docs/discovery.md, "The stop rule and the seeds").
+/// of its standard errors short; docs/discovery-proof.md, "The stop rule and the seeds").
 /// Changing models or parameters keeps the seeds (common random numbers between variants).
 pub fn condition_seed(base: u64, conditions: &BTreeMap<String, f64>) -> u64 {
     let key = conditions

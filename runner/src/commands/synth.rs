@@ -54,7 +54,7 @@ pub struct SynthArgs {
     /// Move a parameter of the truth: PAIR.KEY=DELTA adds DELTA to every number of its value
     /// (as `diagnose --param` and `fit` move it), repeatable. Data from a truth whose
     /// calibrated parameter is off, with no effect hidden, test whether `diagnose` lets the
-    /// free parameters absorb the misfit or blames a candidate (docs/discovery.md, "A
+    /// free parameters absorb the misfit or blames a candidate (docs/discovery-proof.md, "A
     /// free parameter off"). Written into the truth next to --out, as --with.
     #[arg(long = "shift")]
     pub shift: Vec<String>,

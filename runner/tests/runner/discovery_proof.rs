@@ -1,4 +1,4 @@
-//! The discovery loop proven on synthetic data at the coarse preset (docs/discovery.md, "The
+//! The discovery loop proven on synthetic data at the coarse preset (docs/discovery-proof.md, "The
 //! proof with simulations"), through the scripts a user runs. The slow tier: every test here
 //! is `#[ignore]`d and runs with `cargo test --workspace --release -- --ignored` (about 27
 //! minutes on 2 cores; one run cache serves all, so the model's own runs are made once).

@@ -22,8 +22,8 @@
 //!    effect. Any rival makes the verdict `ambiguous` with the set {best} + rivals;
 //! 3. no rival: the best joins S, and step 1 runs again, so a second effect is named only
 //!    when it is needed beyond the first;
-//! 4. the misfit left by S (with the first of an ambiguous set in it): |M_S r|^2, less what
-//!    the finite differences' noise leaks into it, against chi^2(m - rank X_S). Significant:
+//! 4. the misfit left by S (with the first of an ambiguous set in it): |M_S r|^2 against
+//!    chi^2(m - rank X_S). Significant:
 //!    `none_of_the_candidates` (what is left is no candidate's signature), before any
 //!    ambiguity; otherwise `ambiguous`, `effect` with the candidates added, or `no_effect`.
 //!
@@ -82,10 +82,13 @@ pub struct Encompassing {
 pub struct Misfit {
     /// |M_S r|^2.
     pub chi2: f64,
-    /// The part of it that the finite differences' noise is expected to bring.
+    /// What the free parameters' finite-difference noise would leak into it if their shift
+    /// b were real: sum_i b'C_i b (m - q) / m. Reported, not taken off: b is fitted with
+    /// the noisy columns, so when they are noise b is too, and taking the leak off would
+    /// hide a real misfit.
     pub noise: f64,
     pub dof: usize,
-    /// P(chi^2_dof > chi2 - noise).
+    /// P(chi^2_dof > chi2).
     pub p_value: f64,
 }
 
@@ -206,7 +209,7 @@ impl Columns {
         let p_value = if dof == 0 {
             1.0
         } else {
-            chi2_sf((chi2 - leak).max(0.0), dof as f64)
+            chi2_sf(chi2, dof as f64)
         };
         Misfit {
             chi2,

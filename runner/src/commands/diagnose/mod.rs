@@ -64,11 +64,12 @@ pub struct DiagnoseArgs {
     /// steps lift the parameter's effect above the runs' chaos, but measure a secant: on the
     /// discovery proof's draws, 25 % let rolling friction absorb hidden plastic adhesion (found
     /// in 1 draw of 8, against 7 at 5 %), and 2 % left it within its noise in 19 diagnoses of
-    /// 24 (docs/discovery.md, "The free parameters' step in `diagnose`"). A step that leaves
+    /// 24 (docs/discovery-proof.md, "The free parameters' step in `diagnose`"). A step that leaves
     /// a parameter within its noise cannot take out a misfit of that parameter: with rolling
-    /// friction 0.05 off and no effect hidden, 5 % called a candidate significant in 8 seeds
-    /// of 20, 10 % in none ("A free parameter off"). Use 10 % when the free parameters have
-    /// not been fitted to the data.
+    /// friction 0.05 off, no effect hidden and --no-fit, 5 % called a candidate significant
+    /// in 8 seeds of 20, 10 % in none ("A free parameter off"). By default the free
+    /// parameters are fitted first, and the step measures the slope at the fit; with
+    /// --no-fit, use 10 %.
     #[arg(long, default_value_t = 0.05)]
     pub param_step: f64,
     /// Diagnose the model as it is: do not fit the free parameters to the data first (for

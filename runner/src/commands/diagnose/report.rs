@@ -194,7 +194,7 @@ fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
     }
     if !flat.is_empty() {
         md += &format!(
-            "\n**A candidate called significant here may stand for {}.** What the candidates are tested against is the residual left once the free parameters' measured effect is taken out; an effect measured as noise takes nothing out, so a misfit that {} would explain stays in the residual, and a candidate with a signature like it takes the credit. (On data from a truth whose rolling friction was 0.05 above the model's and no effect hidden, a 5 % step called a candidate significant in 8 of 20 seeds, a 10 % step in none: docs/discovery.md, \"A free parameter off\".) Fit the free parameters to these data first, or diagnose again with more replicates or a longer --param-step.\n",
+            "\n**A candidate called significant here may stand for {}.** What the candidates are tested against is the residual left once the free parameters' measured effect is taken out; an effect measured as noise takes nothing out, so a misfit that {} would explain stays in the residual, and a candidate with a signature like it takes the credit. (On data from a truth whose rolling friction was 0.05 above the model's and no effect hidden, a 5 % step called a candidate significant in 8 of 20 seeds, a 10 % step in none: docs/discovery-proof.md, \"A free parameter off\".) Diagnose without --no-fit, so the free parameters are fitted to these data first, or diagnose again with more replicates or a longer --param-step.\n",
             flat.join(", "),
             if flat.len() == 1 { "it" } else { "they" }
         );
@@ -227,11 +227,11 @@ pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
         })
         .collect();
     let misfit = format!(
-        "chi^2 {:.1} on {} degrees of freedom, of which the finite differences' noise is expected to bring {:.1}: p {}",
+        "chi^2 {:.1} on {} degrees of freedom, p {}; the free parameters' noise would bring {:.1} of it if their linear shift were real",
         v.misfit.chi2,
         v.misfit.dof,
-        v.misfit.noise,
-        p(v.misfit.p_value)
+        p(v.misfit.p_value),
+        v.misfit.noise
     );
     let mut md = match v.verdict {
         Kind::Effect => {

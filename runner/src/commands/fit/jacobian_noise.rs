@@ -7,7 +7,7 @@
 //! g_ijs = (y_i(θ + h_j e_j, s) - y_i(θ, s)) / h_j, scaled by 1 / se_i. The grains' chaos
 //! decorrelates the two runs of one seed after a small change, so E is not small: on the
 //! discovery proof's draws the per-seed slopes scatter by more than their mean
-//! (docs/discovery.md, "`fit`'s standard errors"). Since
+//! (docs/discovery-proof.md, "`fit`'s standard errors"). Since
 //! E[Ĵ'Ĵ] = J'J + N, with
 //!
 //!   N_jk = Σ_i Cov_s(g_ijs, g_iks) / (R se_i^2)

@@ -212,7 +212,7 @@ pub struct Step {
 /// slope carries noise of variance 2 s^2 / (R h^2), s the runs' scatter. At 5 % of the range
 /// that noise was larger than the slopes themselves on the discovery proof's draws, so J'J
 /// was mostly noise: steps came out short, the estimates stayed near their start, and the
-/// standard errors were 2-6x too small (docs/discovery.md, "`fit`'s standard errors"). A
+/// standard errors were 2-6x too small (docs/discovery-proof.md, "`fit`'s standard errors"). A
 /// simulation of this fit on a model of two parameters
 /// whose truth is known (`tools/discovery/fit_steps.py`, 400 draws each): with 5 % steps
 /// the estimates fall short of the truth by up to 1.6 of their exact standard deviations

@@ -18,7 +18,7 @@
 //! quantile (no direction the parameters can move is worth a step). A further step then
 //! follows the runs' scatter, and it costs 1 + P settings of DEM runs.
 //!
-//! Each test alone stops too soon (docs/discovery.md, "The stop rule and the seeds"):
+//! Each test alone stops too soon (docs/discovery-proof.md, "The stop rule and the seeds"):
 //! - chi^2 <= dof alone tests the whole residual vector, so a
 //!   miss all rows share along one parameter can hide among the rows' noise: 30 rows each
 //!   0.9 standard errors off give chi^2 = 24.3 on 29 degrees of freedom, and a step would
