@@ -8,8 +8,8 @@ tilth=${TILTH:-target/release/tilth}
 R=${R:-4}
 R_DATA=${R_DATA:-$R}
 R_JUDGE=${R_JUDGE:-$R}
-# More options for every `tilth diagnose`, e.g. DIAGNOSE=--no-fit: score the candidates at
-# the model's own free parameters instead of fitting them to the data first.
+# More options for every `tilth diagnose`, e.g. DIAGNOSE=--fit-first: fit the free
+# parameters to the data first and score the candidates there.
 DIAGNOSE=${DIAGNOSE:-}
 # The injected noise (`tilth synth --noise`).
 NOISE=${NOISE:-heap_cone_angle_deg=0.5,tray_mass_g=0.5,funnel_flow_rate_g_s=2%,funnel_residue_g=0.05}

@@ -1,6 +1,6 @@
 //! `tilth diagnose` end to end at the coarse preset: a candidate that is the free parameter
 //! itself is reported as absorbed (not identifiable, never significant), the report has the
-//! fields the issue names, the free parameters are fitted first unless `--no-fit`, the verdict
+//! fields the issue names, the free parameters are fitted first with `--fit-first`, the verdict
 //! is written and acted on by `tilth fit --from-diagnosis`, and `tilth next` ranks a menu.
 
 use std::path::{Path, PathBuf};
@@ -57,10 +57,6 @@ fn run_diagnose(
         "--quiet",
     ];
     args.extend_from_slice(extra);
-    // The model's own values, not a fit of them, unless a test asks for the fit.
-    if !extra.contains(&"--fit-iterations") {
-        args.push("--no-fit");
-    }
     tilth(&args)
 }
 
@@ -190,7 +186,7 @@ fn param_step_sets_the_free_parameters_finite_difference() {
     );
 }
 
-/// By default the free parameters are fitted to the data first, and the candidates scored at
+/// With --fit-first the free parameters are fitted to the data first, and the candidates scored at
 /// the fitted model; the verdict is written with the fields `fit` and `next` read, and
 /// `fit --from-diagnosis` refuses any verdict but `effect`.
 #[test]
@@ -200,7 +196,7 @@ fn the_free_parameters_are_fitted_first_and_the_verdict_is_written() {
     let out = run_diagnose(
         (&model_path, &data, &out_dir),
         "capillary,twisting",
-        &["--fit-iterations", "1"],
+        &["--fit-first", "--fit-iterations", "1"],
     );
     let json = diagnosis(&out, &out_dir);
     let fit: serde_json::Value =

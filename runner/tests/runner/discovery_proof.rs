@@ -78,11 +78,6 @@ fn script(name: &str, args: &[&str]) {
         .args(args)
         .env("TILTH", env!("CARGO_BIN_EXE_tilth"))
         .env("CACHE", cache())
-        // The candidates scored at the model's own free parameter, linearised (the model
-        // holds the truth's value), as the bars were measured. By default `diagnose` fits the
-        // free parameter to each draw first, which makes every draw's runs its own: the
-        // proof's 56 draws would no longer share the model's runs, nor fit CI's time.
-        .env("DIAGNOSE", "--no-fit")
         // The truth's own compare (OUT/5-truth), the yardstick of a draw no model can follow.
         .env("TRUTH", "1")
         .current_dir(root())

@@ -8,9 +8,9 @@ use serde::Serialize;
 use std::path::PathBuf;
 
 /// Fits the free parameters to the rows with `tilth fit` into `DIR/fit/` and returns the
-/// fitted model's path; None without free parameters or with `--no-fit`.
+/// fitted model's path; None without free parameters or without `--fit-first`.
 pub(super) fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Option<PathBuf>> {
-    if args.params.is_empty() || args.no_fit {
+    if args.params.is_empty() || !args.fit_first {
         return Ok(None);
     }
     let dir = args.out.join("fit");
@@ -24,7 +24,7 @@ pub(super) fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Opt
     };
     if !args.lab.quiet {
         eprintln!(
-            "fitting the free parameters to the data first (--no-fit to skip): {}",
+            "fitting the free parameters to the data first: {}",
             dir.display()
         );
     }

@@ -66,16 +66,17 @@ pub struct DiagnoseArgs {
     /// in 1 draw of 8, against 7 at 5 %), and 2 % left it within its noise in 19 diagnoses of
     /// 24 (docs/discovery-proof.md, "The free parameters' step in `diagnose`"). A step that leaves
     /// a parameter within its noise cannot take out a misfit of that parameter: with rolling
-    /// friction 0.05 off, no effect hidden and --no-fit, 5 % called a candidate significant
-    /// in 8 seeds of 20, 10 % in none ("A free parameter off"). By default the free
-    /// parameters are fitted first, and the step measures the slope at the fit; with
-    /// --no-fit, use 10 %.
+    /// friction 0.05 off and no effect hidden, 5 % called a candidate significant in 8 seeds
+    /// of 20, 10 % in none ("A free parameter off"). Use 10 % when the free parameters have
+    /// not been fitted to the data, or --fit-first.
     #[arg(long, default_value_t = 0.05)]
     pub param_step: f64,
-    /// Diagnose the model as it is: do not fit the free parameters to the data first (for
-    /// a model already fitted to them).
+    /// Fit the free parameters to the data first (`tilth fit`, into DIR/fit/) and score the
+    /// candidates at the fitted model: the restricted estimate of the score test. A
+    /// miscalibrated free parameter is then not blamed on a candidate, but an effect it can
+    /// partly mimic is absorbed too (docs/discovery-proof.md, "A free parameter off").
     #[arg(long)]
-    pub no_fit: bool,
+    pub fit_first: bool,
     /// Levenberg-Marquardt iterations, at most, of that fit (see `tilth fit`).
     #[arg(long, default_value_t = 3)]
     pub fit_iterations: usize,
@@ -189,7 +190,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         bail!("--alpha {} is out of range: allowed (0, 1)", args.alpha);
     }
     if args.fit_iterations == 0 {
-        bail!("--fit-iterations 0 is out of range: allowed 1 or more (or --no-fit)");
+        bail!("--fit-iterations 0 is out of range: allowed 1 or more (with --fit-first)");
     }
     if !(args.param_step > 0.0 && args.param_step <= 0.5) {
         bail!(
@@ -224,9 +225,8 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         .iter()
         .map(|p| parse_probe(p))
         .collect::<Result<_>>()?;
-    // The restricted estimate: the candidates are scored where the model without them fits
-    // the data best, so a miscalibrated free parameter is taken out by its fit, not by a
-    // linear extrapolation from the model's start.
+    // With --fit-first, the restricted estimate: the candidates are scored where the model
+    // without them fits the data best.
     let (model, text, fitted) = match fit_first(args, &rows)? {
         Some(path) => (
             Model::load(&path)?,

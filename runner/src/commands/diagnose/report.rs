@@ -58,7 +58,7 @@ pub(super) fn report(args: &DiagnoseArgs, f: &Findings) -> String {
     );
     if let Some(f) = fit_first {
         md += &format!(
-            "The free parameters were fitted to these data first (`{}/fit/fit.md`): {}; chi^2 {:.1} before, {:.1} after, on {} degrees of freedom. The candidates are scored at the fitted values (the restricted estimate of the score test), and \"now\" below is the fitted model. An effect that the free parameters mimic on these readings is absorbed by that fit: `--no-fit` scores the candidates against the model as it was.\n\n",
+            "The free parameters were fitted to these data first (`{}/fit/fit.md`): {}; chi^2 {:.1} before, {:.1} after, on {} degrees of freedom. The candidates are scored at the fitted values (the restricted estimate of the score test), and \"now\" below is the fitted model. An effect that the free parameters mimic on these readings is absorbed by that fit: without --fit-first the candidates are scored against the model as it was.\n\n",
             args.out.display(),
             f.parameters
                 .iter()
@@ -194,7 +194,7 @@ fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
     }
     if !flat.is_empty() {
         md += &format!(
-            "\n**A candidate called significant here may stand for {}.** What the candidates are tested against is the residual left once the free parameters' measured effect is taken out; an effect measured as noise takes nothing out, so a misfit that {} would explain stays in the residual, and a candidate with a signature like it takes the credit. (On data from a truth whose rolling friction was 0.05 above the model's and no effect hidden, a 5 % step called a candidate significant in 8 of 20 seeds, a 10 % step in none: docs/discovery-proof.md, \"A free parameter off\".) Diagnose without --no-fit, so the free parameters are fitted to these data first, or diagnose again with more replicates or a longer --param-step.\n",
+            "\n**A candidate called significant here may stand for {}.** What the candidates are tested against is the residual left once the free parameters' measured effect is taken out; an effect measured as noise takes nothing out, so a misfit that {} would explain stays in the residual, and a candidate with a signature like it takes the credit. (On data from a truth whose rolling friction was 0.05 above the model's and no effect hidden, a 5 % step called a candidate significant in 8 of 20 seeds, a 10 % step in none: docs/discovery-proof.md, \"A free parameter off\".) Fit the free parameters to these data first (--fit-first), or diagnose again with more replicates or a longer --param-step.\n",
             flat.join(", "),
             if flat.len() == 1 { "it" } else { "they" }
         );
