@@ -54,7 +54,7 @@ pub enum Kind {
 
 /// An effect the verdict names, at its least-squares strength given the free parameters and
 /// the other effects named.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Named {
     pub name: String,
     pub strength: f64,
@@ -68,7 +68,7 @@ pub struct Named {
 
 /// One encompassing test: is `needed` still needed once `given` is in the model (with the
 /// free parameters)?
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Encompassing {
     pub needed: String,
     pub given: String,
@@ -78,7 +78,7 @@ pub struct Encompassing {
 }
 
 /// The misfit the named effects and the free parameters leave (linearised).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Misfit {
     /// |M_S r|^2.
     pub chi2: f64,
@@ -92,7 +92,7 @@ pub struct Misfit {
     pub p_value: f64,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Verdict {
     pub verdict: Kind,
     /// The effects named, in the order they were added (empty unless `effect`; for

@@ -29,6 +29,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use tilth_tools::diagnose::{Candidate, JacobianNoise, Score, score_tests};
 
+pub mod file;
 mod fit_first;
 mod report;
 

@@ -3,38 +3,9 @@
 //! their ranges, and each effect the verdict names, its strength free from the diagnosis's
 //! estimate. Any other verdict is refused, with what to do instead.
 
-use anyhow::{Context, Result, bail};
-use serde::Deserialize;
+use anyhow::{Result, bail};
 use std::path::Path;
 use tilth_tools::diagnose::verdict::Kind;
-
-#[derive(Deserialize)]
-struct Diagnosis {
-    free_parameters: Vec<Free>,
-    verdict: Verdict,
-}
-
-#[derive(Deserialize)]
-struct Free {
-    pair: String,
-    key: String,
-    low: f64,
-    high: f64,
-}
-
-#[derive(Deserialize)]
-struct Verdict {
-    verdict: Kind,
-    effects: Vec<Named>,
-    ambiguous: Vec<String>,
-}
-
-#[derive(Deserialize)]
-struct Named {
-    name: String,
-    strength: f64,
-    standard_error: f64,
-}
 
 /// The `--param` strings the verdict in `dir` calls for. An effect's strength runs over
 /// [0, max(3 x, x + 4 se, 2 step)] from its estimate x (0 if negative): wide enough that the
@@ -43,15 +14,7 @@ pub fn params_from_diagnosis(
     dir: &Path,
     steps: &dyn Fn(&str) -> Option<f64>,
 ) -> Result<Vec<String>> {
-    let path = dir.join("diagnosis.json");
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("--from-diagnosis: cannot read {}", path.display()))?;
-    let d: Diagnosis = serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: not a diagnosis with a verdict (written by `tilth diagnose` of this version?)",
-            path.display()
-        )
-    })?;
+    let (d, path) = crate::commands::diagnose::file::read(dir, "--from-diagnosis")?;
     let v = &d.verdict;
     match v.verdict {
         Kind::Effect => {}

@@ -25,7 +25,7 @@ use crate::sweep::execute;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use nalgebra::DMatrix;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -44,6 +44,7 @@ pub struct NextArgs {
     /// synth --conditions`), with an `observable` column to offer only some readings.
     #[arg(long)]
     pub menu: PathBuf,
+    /// Where next.json, next.md and conditions.csv go (the menu's runs in runs/).
     #[arg(long)]
     pub out: PathBuf,
     /// The rivals to separate (default: the diagnosis's ambiguous set).
@@ -63,59 +64,7 @@ pub struct NextArgs {
     pub lab: LabRunArgs,
 }
 
-#[derive(Deserialize)]
-struct Diagnosis {
-    model: PathBuf,
-    replicates: usize,
-    coarse: bool,
-    param_step: f64,
-    alpha: f64,
-    free_parameters: Vec<Free>,
-    #[serde(default)]
-    probes: Vec<Probe>,
-    verdict: VerdictIn,
-    candidates: Vec<CandidateIn>,
-    rows: Vec<serde_json::Value>,
-    columns: ColumnsIn,
-}
-
-#[derive(Deserialize)]
-struct Free {
-    pair: String,
-    key: String,
-    low: f64,
-    high: f64,
-}
-
-#[derive(Deserialize)]
-struct Probe {
-    parameter: String,
-    step: f64,
-}
-
-#[derive(Deserialize)]
-struct VerdictIn {
-    verdict: Kind,
-    ambiguous: Vec<String>,
-}
-
-#[derive(Deserialize)]
-struct CandidateIn {
-    name: String,
-    strength: f64,
-}
-
-#[derive(Deserialize)]
-struct ColumnsIn {
-    free: BTreeMap<String, Vec<f64>>,
-    candidates: BTreeMap<String, Signature>,
-}
-
-#[derive(Deserialize)]
-struct Signature {
-    sensitivity: Vec<f64>,
-    variance: Vec<f64>,
-}
+use crate::commands::diagnose::file::DiagnosisFile as Diagnosis;
 
 /// One measurement the lab could take, scored.
 #[derive(Debug, Serialize)]
@@ -141,8 +90,7 @@ struct Variant {
 
 pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
-    let path = args.diagnosis.join("diagnosis.json");
-    let (d, rivals) = load(args, &path)?;
+    let (d, rivals, path) = load(args)?;
     let model = Model::load(&std::path::absolute(&d.model)?)?;
     let variants = variants_of(&d, &model, &args.diagnosis, &rivals)?;
     let menu = read_menu(&args.menu)?;
@@ -252,15 +200,9 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
 }
 
 /// The diagnosis in `path`, checked against the options, and the rivals to separate.
-fn load(args: &NextArgs, path: &Path) -> Result<(Diagnosis, Vec<String>)> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("--diagnosis: cannot read {}", path.display()))?;
-    let d: Diagnosis = serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: not a diagnosis with a verdict and columns (written by `tilth diagnose` of this version?)",
-            path.display()
-        )
-    })?;
+fn load(args: &NextArgs) -> Result<(Diagnosis, Vec<String>, PathBuf)> {
+    let (d, path) = crate::commands::diagnose::file::read(&args.diagnosis, "--diagnosis")?;
+    let path = &path;
     if d.coarse != args.lab.coarse {
         bail!(
             "{} was made {} the coarse preset: run `tilth next` {} --coarse, so the new rows are simulated as the old",
@@ -286,7 +228,7 @@ fn load(args: &NextArgs, path: &Path) -> Result<(Diagnosis, Vec<String>)> {
     if rivals.len() < 2 {
         bail!("--rivals: allowed two or more candidates, got {rivals:?}");
     }
-    Ok((d, rivals))
+    Ok((d, rivals, path.clone()))
 }
 
 /// The rivals, each at its estimated strength, and the level of the tests between them.

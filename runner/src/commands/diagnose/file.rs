@@ -1,0 +1,73 @@
+//! `diagnosis.json` as `tilth fit --from-diagnosis` and `tilth next` read it back.
+
+use anyhow::{Context, Result};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use tilth_tools::diagnose::verdict::Verdict;
+
+#[derive(Deserialize)]
+pub struct DiagnosisFile {
+    pub model: PathBuf,
+    pub replicates: usize,
+    pub coarse: bool,
+    pub param_step: f64,
+    pub alpha: f64,
+    pub free_parameters: Vec<Free>,
+    #[serde(default)]
+    pub probes: Vec<Probe>,
+    pub verdict: Verdict,
+    pub candidates: Vec<CandidateIn>,
+    pub rows: Vec<serde_json::Value>,
+    pub columns: ColumnsIn,
+}
+
+/// A `--param PAIR.KEY=LOW:HIGH` of the diagnosis.
+#[derive(Deserialize)]
+pub struct Free {
+    pub pair: String,
+    pub key: String,
+    pub low: f64,
+    pub high: f64,
+}
+
+/// A `--probe PAIR.KEY=STEP` of the diagnosis.
+#[derive(Deserialize)]
+pub struct Probe {
+    pub parameter: String,
+    pub step: f64,
+}
+
+/// A candidate's score, as far as it is read back.
+#[derive(Deserialize)]
+pub struct CandidateIn {
+    pub name: String,
+    pub strength: f64,
+}
+
+/// The standardised columns, one number per entry of `rows`.
+#[derive(Deserialize)]
+pub struct ColumnsIn {
+    pub free: BTreeMap<String, Vec<f64>>,
+    pub candidates: BTreeMap<String, Signature>,
+}
+
+#[derive(Deserialize)]
+pub struct Signature {
+    pub sensitivity: Vec<f64>,
+    pub variance: Vec<f64>,
+}
+
+/// Reads `dir/diagnosis.json`; `what` names the option that asked for it.
+pub fn read(dir: &Path, what: &str) -> Result<(DiagnosisFile, PathBuf)> {
+    let path = dir.join("diagnosis.json");
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("{what}: cannot read {}", path.display()))?;
+    let d = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not a diagnosis with a verdict and columns (written by `tilth diagnose` of this version?)",
+            path.display()
+        )
+    })?;
+    Ok((d, path))
+}
