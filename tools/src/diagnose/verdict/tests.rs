@@ -67,6 +67,11 @@ impl Problem {
         for (s, theta) in truth {
             r += *s * *theta;
         }
+        self.verdict_on(&r)
+    }
+
+    /// The verdict on residuals `r`, the candidates' sensitivities exact.
+    fn verdict_on(&self, r: &DVector<f64>) -> Verdict {
         let candidates: Vec<Candidate> = self
             .signatures
             .iter()
@@ -233,18 +238,7 @@ fn an_encompassing_statistic_is_the_projection_formula() {
     let coef = (s.transpose() * &s).try_inverse().unwrap() * s.transpose();
     let g = a - &s * (&coef * a);
     let want = g.dot(&r).powi(2) / g.dot(&g);
-    let candidates: Vec<Candidate> = p
-        .signatures
-        .iter()
-        .map(|(n, v)| Candidate {
-            name: n.clone(),
-            sensitivity: v.iter().copied().collect(),
-            sensitivity_var: vec![],
-        })
-        .collect();
-    let noise = JacobianNoise::default();
-    let scores = score_tests(r.as_slice(), &p.x, &noise, &candidates);
-    let v = verdict(r.as_slice(), &p.x, &noise, &candidates, &scores, ALPHA);
+    let v = p.verdict_on(&r);
     let got = v
         .encompassing
         .iter()
