@@ -363,15 +363,24 @@ pub fn measurable(x: &[f64], var: &[f64]) -> bool {
 
 /// Holm's step-down correction of `p_raw` into `p_value` (monotone, capped at 1).
 fn holm(scores: &mut [Score]) {
-    let k = scores.len();
+    let raw: Vec<f64> = scores.iter().map(|s| s.p_raw).collect();
+    for (s, p) in scores.iter_mut().zip(holm_adjust(&raw)) {
+        s.p_value = p;
+    }
+}
+
+/// Holm's step-down correction of raw p-values, in their order (monotone, capped at 1).
+pub(crate) fn holm_adjust(raw: &[f64]) -> Vec<f64> {
+    let k = raw.len();
     let mut order: Vec<usize> = (0..k).collect();
-    order.sort_by(|&a, &b| scores[a].p_raw.total_cmp(&scores[b].p_raw));
+    order.sort_by(|&a, &b| raw[a].total_cmp(&raw[b]));
+    let mut out = vec![1.0; k];
     let mut running: f64 = 0.0;
     for (rank, &i) in order.iter().enumerate() {
-        let adj = ((k - rank) as f64 * scores[i].p_raw).min(1.0);
-        running = running.max(adj);
-        scores[i].p_value = running;
+        running = running.max(((k - rank) as f64 * raw[i]).min(1.0));
+        out[i] = running;
     }
+    out
 }
 
 #[cfg(test)]

@@ -31,7 +31,7 @@
 //! one-step estimate from its finite difference, and the misfit is what that linear model
 //! leaves. `tilth fit` then fits the verdict's effects on simulations and tests its chi^2.
 
-use super::{Candidate, JacobianNoise, ResidualMaker, Score};
+use super::{Candidate, JacobianNoise, ResidualMaker, Score, holm_adjust};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -239,20 +239,6 @@ fn chi2_sf(x: f64, dof: f64) -> f64 {
     ChiSquared::new(dof).expect("positive dof").sf(x)
 }
 
-/// Holm's step-down correction of raw p-values, in their order.
-fn holm(raw: &[f64]) -> Vec<f64> {
-    let k = raw.len();
-    let mut order: Vec<usize> = (0..k).collect();
-    order.sort_by(|&a, &b| raw[a].total_cmp(&raw[b]));
-    let mut out = vec![1.0; k];
-    let mut running: f64 = 0.0;
-    for (rank, &i) in order.iter().enumerate() {
-        running = running.max(((k - rank) as f64 * raw[i]).min(1.0));
-        out[i] = running;
-    }
-    out
-}
-
 /// The verdict on the residuals `residual` (standardised) given the free parameters'
 /// Jacobian `jacobian`, its noise and the candidates, as [`super::score_tests`] takes them;
 /// `scores` is its output (only identifiable candidates take part).
@@ -314,7 +300,7 @@ pub fn verdict(
                 (t, pr)
             })
             .collect();
-        let corrected = holm(&tests.iter().map(|t| t.1).collect::<Vec<_>>());
+        let corrected = holm_adjust(&tests.iter().map(|t| t.1).collect::<Vec<_>>());
         let best = (0..left.len())
             .max_by(|&a, &b| tests[a].0.total_cmp(&tests[b].0))
             .expect("non-empty");
