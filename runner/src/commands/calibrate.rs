@@ -114,7 +114,7 @@ pub struct CalibrateArgs {
 }
 
 /// A free parameter.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct Param {
     /// `rolling_friction`
     pub name: String,

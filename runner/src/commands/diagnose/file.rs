@@ -1,5 +1,6 @@
 //! `diagnosis.json` as `tilth fit --from-diagnosis` and `tilth next` read it back.
 
+use crate::commands::calibrate::Param;
 use anyhow::{Context, Result};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -13,22 +14,13 @@ pub struct DiagnosisFile {
     pub coarse: bool,
     pub param_step: f64,
     pub alpha: f64,
-    pub free_parameters: Vec<Free>,
+    pub free_parameters: Vec<Param>,
     #[serde(default)]
     pub probes: Vec<Probe>,
     pub verdict: Verdict,
     pub candidates: Vec<CandidateIn>,
     pub rows: Vec<serde_json::Value>,
     pub columns: ColumnsIn,
-}
-
-/// A `--param PAIR.KEY=LOW:HIGH` of the diagnosis.
-#[derive(Deserialize)]
-pub struct Free {
-    pub pair: String,
-    pub key: String,
-    pub low: f64,
-    pub high: f64,
 }
 
 /// A `--probe PAIR.KEY=STEP` of the diagnosis.
