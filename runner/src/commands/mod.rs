@@ -13,6 +13,7 @@ pub mod measurements;
 pub mod model_edit;
 pub mod next;
 pub mod project_report;
+pub mod project_story;
 pub mod reduce;
 pub mod report;
 pub mod rsm;

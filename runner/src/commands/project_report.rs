@@ -5,7 +5,9 @@
 //! when they were made (`created`, else the file's modification time). The page has: the runs
 //! (model, data, replicates), the error of every observable with one column per run, the RMSE
 //! history of every observable as a chart, each run's summary in words, and each plot of the
-//! runs side by side, oldest first, so that the effect of a model change is seen at a glance.
+//! runs side by side, oldest first, so that the effect of a model change is seen at a glance;
+//! and the story of the discovery loop: each compare, verdict, suggested measurement and
+//! fit with its model diff, in order (`project_story`).
 //! Plots are inlined (SVG); nothing is fetched.
 
 use anyhow::{Context, Result, bail};
@@ -155,6 +157,10 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     html += "</table>\n";
+    html += &super::project_story::story_html(
+        &super::project_story::find_steps(&args.project)?,
+        escape,
+    );
 
     html += "<h2>Error per observable</h2>\n<p>RMSE in the observable's unit, and below it the mean relative error; \
              green where a run's RMSE fell from the run before it, red where it rose.</p>\n\

@@ -283,6 +283,98 @@ fn report_puts_a_projects_compare_runs_side_by_side() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("no compare run below it"));
 }
 
+/// `tilth report` tells the loop's story in order: each compare's errors, the diagnosis's
+/// verdict, `next`'s suggestion and the fit's model diff (the effect added and the parameter
+/// moved, with standard errors), ordered by `created` or, where a step has none, its file's
+/// modification time.
+#[test]
+fn report_tells_the_loops_story_with_verdicts_and_model_diffs() {
+    let dir = scratch("report-story");
+    let now = std::time::SystemTime::now();
+    let at = |s: u64| now - std::time::Duration::from_secs(1000 - s);
+    let epoch = |s: u64| {
+        at(s)
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_secs_f64()
+    };
+    let write = |sub: &str, file: &str, json: serde_json::Value, when: u64| {
+        let d = dir.join(sub);
+        std::fs::create_dir_all(&d).unwrap();
+        std::fs::write(d.join(file), json.to_string()).unwrap();
+        let f = std::fs::File::options()
+            .write(true)
+            .open(d.join(file))
+            .unwrap();
+        f.set_modified(at(when)).unwrap();
+    };
+    let compare = |model: &str, rmse: f64, when: u64| {
+        serde_json::json!({
+            "created": epoch(when), "model": model, "data": "d.csv", "replicates": 4, "rows": [],
+            "observables": {"heap_cone_angle_deg": {"rmse": rmse, "mean_relative_error": 0.1, "n": 4}},
+            "verdicts": [], "summary": "", "plots": [],
+        })
+    };
+    write(
+        "1-compare",
+        "compare.json",
+        compare("models/li2022.toml", 6.1675, 10),
+        10,
+    );
+    write(
+        "2-diagnose",
+        "diagnosis.json",
+        serde_json::json!({"verdict": {"verdict": "effect", "alpha": 0.01, "ambiguous": [],
+            "effects": [{"name": "fines", "strength": 0.1821, "standard_error": 0.0131, "p_value": 1e-9}],
+            "misfit": {"chi2": 12.5, "dof": 13, "noise": 1.0, "p_value": 0.49}, "encompassing": []}}),
+        20,
+    );
+    write(
+        "3-next",
+        "next.json",
+        serde_json::json!({"alpha": 0.01, "rivals": ["plastic_adhesion", "twisting"],
+            "options": [{"test": "direct_shear", "conditions": {"moisture_pct": 3.0},
+                "observables": ["peak_shear_force_n"], "power": 0.93, "runs": 36, "separation": 4.0}]}),
+        30,
+    );
+    write(
+        "4-fit",
+        "fit.json",
+        serde_json::json!({"model": "models/li2022.toml", "fitted_model": "4-fit/model.toml",
+            "chi2": 14.2, "dof": 14, "estimate": [0.0312, 0.1594], "standard_error": [0.011, 0.0072],
+            "parameters": [
+                {"label": "soil-soil.rolling_friction", "target": {"offset": {"path": "soil-soil.rolling_friction"}}, "start": 0.0, "low": -0.1, "high": 0.2},
+                {"label": "fines", "target": {"candidate": {"name": "fines"}}, "start": 0.18, "low": 0.0, "high": 0.5}]}),
+        40,
+    );
+    write(
+        "5-compare",
+        "compare.json",
+        compare("4-fit/model.toml", 1.2, 50),
+        50,
+    );
+    let o = tilth(&["report", dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let story = &html[html
+        .find("The story, step by step")
+        .expect("a story section")..];
+    let lines = [
+        "<td>1</td><td class=\"l\">compare</td><td class=\"l path\">1-compare</td><td class=\"l\">models/li2022.toml against d.csv: RMSE heap_cone_angle_deg 6.1675</td>",
+        "<td>2</td><td class=\"l\">diagnose</td><td class=\"l path\">2-diagnose</td><td class=\"l\">effect: fines (strength 0.1821 ± 0.0131); misfit chi^2 12.5 on 13 degrees of freedom, p 0.490</td>",
+        "<td>3</td><td class=\"l\">next</td><td class=\"l path\">3-next</td><td class=\"l\">to tell apart plastic_adhesion, twisting: measure direct_shear at moisture_pct 3.0 (peak_shear_force_n), power 0.93 at alpha 0.01, 36 runs</td>",
+        "<td>4</td><td class=\"l\">fit</td><td class=\"l path\">4-fit</td><td class=\"l\">models/li2022.toml -&gt; 4-fit/model.toml: ~ soil-soil.rolling_friction: moved by +0.0312 ± 0.0110; + effect fines: strength 0.1594 ± 0.0072; chi^2 14.2 on 14 degrees of freedom</td>",
+        "<td>5</td><td class=\"l\">compare</td><td class=\"l path\">5-compare</td><td class=\"l\">4-fit/model.toml against d.csv: RMSE heap_cone_angle_deg 1.2000</td>",
+    ];
+    let mut from = 0;
+    for line in lines {
+        let k = story[from..]
+            .find(line)
+            .unwrap_or_else(|| panic!("missing or out of order: {line}\n{story}"));
+        from += k + line.len();
+    }
+}
+
 /// A repose run gives several readings: rows of one test at the same conditions share their
 /// runs, and with `--replicates N` each value is the mean of N truth runs, its uncertainty
 /// sqrt(noise^2 + s^2 / N) with s their scatter (read back from the runs' summaries here).

@@ -51,14 +51,38 @@ fn points_with_bars(
     Ok(())
 }
 
-/// Simulated mean against measured value for one observable's rows, with the 1:1 line and
-/// bars of +/- one standard error of the residual on the simulated value.
+/// A row's conditions as a point label: "6 %", "1.55 MPa", "100 kPa"; a condition whose
+/// name carries no unit suffix as "name value".
+pub fn condition_label(conditions: &std::collections::BTreeMap<String, f64>) -> String {
+    let one = |(name, v): (&String, &f64)| {
+        if name.ends_with("_pct") {
+            format!("{v} %")
+        } else if name.ends_with("_mpa") {
+            format!("{v} MPa")
+        } else if name.ends_with("_pa") && v.abs() >= 1e3 {
+            format!("{} kPa", v / 1e3)
+        } else if name.ends_with("_pa") {
+            format!("{v} Pa")
+        } else {
+            format!("{name} {v}")
+        }
+    };
+    conditions.iter().map(one).collect::<Vec<_>>().join(", ")
+}
+
+/// Simulated mean against measured value for one observable's rows, with the 1:1 line,
+/// bars of +/- one standard error of the residual on the simulated value, and each point
+/// labelled with its conditions (which row misses is what a reader asks first).
 pub fn simulated_vs_measured_svg(rows: &[&Row]) -> Result<String, String> {
     let what = "simulated-vs-measured plot";
-    let pts: Vec<(f64, f64, f64)> = rows
+    let labelled: Vec<((f64, f64, f64), String)> = rows
         .iter()
-        .filter_map(|r| Some((r.measured, r.simulated?, r.std_error.unwrap_or(0.0))))
+        .filter_map(|r| {
+            let p = (r.measured, r.simulated?, r.std_error.unwrap_or(0.0));
+            Some((p, condition_label(&r.conditions)))
+        })
         .collect();
+    let pts: Vec<(f64, f64, f64)> = labelled.iter().map(|(p, _)| *p).collect();
     let (lo, hi) = padded(
         pts.iter()
             .flat_map(|p| [p.0, p.1 - p.2, p.1 + p.2].into_iter()),
@@ -91,6 +115,12 @@ pub fn simulated_vs_measured_svg(rows: &[&Row]) -> Result<String, String> {
             .draw_series(LineSeries::new([(lo, lo), (hi, hi)], GREY.stroke_width(1)))
             .map_err(err(what))?;
         points_with_bars(&mut chart, &pts, what)?;
+        chart
+            .draw_series(labelled.iter().map(|((x, y, _), label)| {
+                EmptyElement::at((*x, *y))
+                    + Text::new(label.clone(), (7, -14), (FONT, 11).into_font().color(&GREY))
+            }))
+            .map_err(err(what))?;
         root.present().map_err(err(what))?;
     }
     Ok(svg)
@@ -196,4 +226,39 @@ pub fn history_svg(observable: &str, unit: &str, rmse: &[f64]) -> Result<String,
         root.present().map_err(err(what))?;
     }
     Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    fn row(conditions: &[(&str, f64)], measured: f64) -> Row {
+        Row {
+            test: "direct_shear".into(),
+            observable: "peak_shear_force_n".into(),
+            unit: "N".into(),
+            conditions: conditions
+                .iter()
+                .map(|(k, v)| (k.to_string(), *v))
+                .collect::<BTreeMap<_, _>>(),
+            measured,
+            simulated: Some(measured + 1.0),
+            std_error: Some(0.5),
+        }
+    }
+
+    #[test]
+    fn each_point_is_labelled_with_its_conditions() {
+        let a = row(&[("moisture_pct", 6.0), ("normal_pressure_pa", 1e5)], 40.0);
+        let b = row(&[("moisture_pct", 12.0), ("firmness_mpa", 1.55)], 55.0);
+        let c = row(&[("drop_mm", 60.0)], 50.0);
+        assert_eq!(condition_label(&a.conditions), "6 %, 100 kPa");
+        assert_eq!(condition_label(&b.conditions), "1.55 MPa, 12 %");
+        assert_eq!(condition_label(&c.conditions), "drop_mm 60");
+        let svg = simulated_vs_measured_svg(&[&a, &b, &c]).unwrap();
+        for label in ["6 %, 100 kPa", "1.55 MPa, 12 %", "drop_mm 60"] {
+            assert!(svg.contains(label), "{label} missing from the plot");
+        }
+    }
 }
