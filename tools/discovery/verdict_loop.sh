@@ -54,11 +54,17 @@ fi
 if [ "$final" = effect ]; then
   diag=$out/2-diagnose
   [ -d "$out/4-diagnose" ] && diag=$out/4-diagnose data=$out/data-2.csv || data=$out/data.csv
-  "$tilth" fit --model "$model" --data "$data" --from-diagnosis "$diag" --out "$out/5-fit" \
-    --replicates "$R" --iterations 3 "${lab[@]}" > /dev/null
+  # With DIAGNOSE=--refit the diagnosis has fitted the named effect already.
+  refitted=$diag/refit/$final_names
+  if [ -f "$refitted/fit.json" ]; then
+    mkdir -p "$out/5-fit" && cp "$refitted"/fit.json "$refitted"/fit.md "$refitted"/model.toml "$out/5-fit/"
+  else
+    "$tilth" fit --model "$model" --data "$data" --from-diagnosis "$diag" --out "$out/5-fit" \
+      --replicates "$R" --iterations 3 "${lab[@]}" > /dev/null
+  fi
   "$tilth" compare --model "$out/5-fit/model.toml" --data "$data" --out "$out/6-compare" \
     --replicates "$R_JUDGE" "${lab[@]}" > /dev/null
-  line="$line; fitted $(python3 -c "import json,sys; f=json.load(open(sys.argv[1])); print(' '.join(f'{p[\"label\"]}={e:.4f}' for p,e in zip(f['parameters'],f['estimate'])), 'chi2 %.1f dof %d' % (f['chi2'], f['dof']))" "$out/5-fit/fit.json")"
+  line="$line; fitted $(python3 -c "import json,sys; f=json.load(open(sys.argv[1])); print(' '.join(f'{p[\"label\"]}={e:.4f}±{s or 0:.4f}' for p,e,s in zip(f['parameters'],f['estimate'],f['standard_error'])), 'chi2 %.1f dof %d' % (f['chi2'], f['dof']))" "$out/5-fit/fit.json")"
 fi
 case "$final $final_names" in
   "effect $effect" | "no_effect -") [ "$effect" = none ] || [ "$final" = effect ] && right=right || right=unnamed ;;

@@ -370,7 +370,7 @@ fn holm(scores: &mut [Score]) {
 }
 
 /// Holm's step-down correction of raw p-values, in their order (monotone, capped at 1).
-pub(crate) fn holm_adjust(raw: &[f64]) -> Vec<f64> {
+pub fn holm_adjust(raw: &[f64]) -> Vec<f64> {
     let k = raw.len();
     let mut order: Vec<usize> = (0..k).collect();
     order.sort_by(|&a, &b| raw[a].total_cmp(&raw[b]));

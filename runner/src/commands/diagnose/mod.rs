@@ -31,6 +31,7 @@ use tilth_tools::diagnose::{Candidate, JacobianNoise, Score, score_tests};
 
 pub mod file;
 mod fit_first;
+mod refit;
 mod report;
 
 use fit_first::{fit_first, fit_summary};
@@ -78,7 +79,14 @@ pub struct DiagnoseArgs {
     /// partly mimic is absorbed too (docs/discovery-proof.md, "A free parameter off").
     #[arg(long)]
     pub fit_first: bool,
-    /// Levenberg-Marquardt iterations, at most, of that fit (see `tilth fit`).
+    /// Fit each contender (a candidate or probe the linear verdict found significant or kept,
+    /// with a positive strength) with the free parameters on simulations (`tilth fit`, into
+    /// DIR/refit/NAME/) and give the verdict from the fits: the one contender whose fitted
+    /// chi^2 is within the noise is named, several are ambiguous, none is
+    /// none_of_the_candidates. Costs one fit per contender (docs/discovery.md, "--refit").
+    #[arg(long)]
+    pub refit: bool,
+    /// Levenberg-Marquardt iterations, at most, of each fit (--fit-first, --refit; see `tilth fit`).
     #[arg(long, default_value_t = 3)]
     pub fit_iterations: usize,
     /// Corrected p-value below which a candidate is called significant.
@@ -487,6 +495,23 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             }
         })
         .collect();
+    let refitted = {
+        let doc: toml_edit::DocumentMut = text.parse()?;
+        let step_of = |d: &Diagnosed| -> Result<(f64, Vec<f64>)> {
+            match d.score.name.strip_prefix(HELD) {
+                Some(key) => {
+                    let step = probes.iter().find(|(k, _)| k == key).map_or(0.0, |p| p.1);
+                    Ok((step, values_of(&doc, key)?))
+                }
+                None => Ok((model.file.candidates[&d.score.name].step, vec![])),
+            }
+        };
+        refit::refit(args, &rows, &verdict, &diagnosed, &step_of)?
+    };
+    let (verdict, linear_verdict, refits) = match refitted {
+        Some((v, refits)) => (v, Some(verdict), Some(refits)),
+        None => (verdict, None, None),
+    };
     let json = serde_json::json!({
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
@@ -506,6 +531,8 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "candidates": diagnosed,
         "probes": probes.iter().map(|(k, h)| serde_json::json!({"parameter": k, "step": h})).collect::<Vec<_>>(),
         "verdict": verdict,
+        "linear_verdict": linear_verdict,
+        "refit": refits,
         // Standardised, one number per entry of "rows": what `tilth next` extends.
         "columns": {
             "free": params.iter().enumerate().map(|(c, p)| (format!("{}.{}", p.pair, p.key), x.column(c).iter().copied().collect::<Vec<_>>())).collect::<BTreeMap<_, _>>(),
@@ -537,6 +564,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             dropped: &dropped,
             verdict: &verdict,
             fit_first: fit_first.as_ref(),
+            refits: refits.as_ref(),
         },
     );
     std::fs::write(args.out.join("diagnosis.md"), &md)?;

@@ -2,6 +2,7 @@
 
 use super::HELD;
 use super::fit_first::FitFirst;
+use super::refit::Refits;
 use super::{DiagnoseArgs, Diagnosed, Recalibrated};
 use crate::commands::calibrate::Param;
 use std::collections::BTreeMap;
@@ -19,6 +20,7 @@ pub(super) struct Findings<'a> {
     pub dropped: &'a [String],
     pub verdict: &'a Verdict,
     pub fit_first: Option<&'a FitFirst>,
+    pub refits: Option<&'a Refits>,
 }
 
 pub(super) fn report(args: &DiagnoseArgs, f: &Findings) -> String {
@@ -31,6 +33,7 @@ pub(super) fn report(args: &DiagnoseArgs, f: &Findings) -> String {
         dropped,
         verdict,
         fit_first,
+        refits,
     } = *f;
     let mut md = format!(
         "# Diagnosis of {} against {}\n\n",
@@ -111,6 +114,9 @@ pub(super) fn report(args: &DiagnoseArgs, f: &Findings) -> String {
         );
     }
     md += "\n";
+    if let Some(fits) = refits {
+        md += &refit_table(fits, args.alpha);
+    }
     md += &verdict_words(verdict, &args.out);
     for c in d.iter().filter(|c| !c.score.identifiable) {
         md += &match c.score.unidentified {
@@ -211,6 +217,36 @@ fn called(name: &str) -> String {
 }
 
 /// The verdict in words: what the data call for, and what to do next.
+/// The contenders' fits on simulations (`--refit`), and how the verdict follows from them.
+fn refit_table(r: &Refits, alpha: f64) -> String {
+    let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();
+    let mut md = format!(
+        "Refitted on simulations (--refit; `tilth fit` in DIR/refit/): the free parameters alone leave chi^2 {:.1} on {} degrees of freedom (p {}); each contender fitted with them:\n\n\
+         | contender | fitted strength | standard error | chi^2 | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        r.free.chi2,
+        r.free.dof,
+        p(r.free.p_value)
+    );
+    for c in &r.contenders {
+        md += &format!(
+            "| {} | {:.4} | {} | {:.1} | {} | {} | {:.1} | {} | {} | {} |\n",
+            c.name,
+            c.strength,
+            c.standard_error.map_or("-".into(), |s| format!("{s:.4}")),
+            c.chi2,
+            c.dof,
+            p(c.p_value),
+            c.chi2_drop,
+            p(c.p_needed),
+            if c.needed { "yes" } else { "no" },
+            if c.within_noise { "yes" } else { "no" }
+        );
+    }
+    md + &format!(
+        "\nNeeded: the drop from the free parameters' fit against chi^2(1), Holm-corrected, under {alpha}; within the noise: p >= {alpha}. The verdict below is the fits': one contender both needed and within the noise is named with its fitted strength, several are ambiguous, none is none of the candidates (or no effect when none is needed and the free parameters' fit is within the noise).\n\n"
+    )
+}
+
 pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
     let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();
     let effects: Vec<String> = v
