@@ -64,6 +64,9 @@ pub struct NullFit {
     pub dir: String,
 }
 
+/// A contender's finite-difference step and, for a held parameter, the model's values of it.
+pub(super) type StepOf<'a> = dyn Fn(&Diagnosed) -> Result<(f64, Vec<f64>)> + 'a;
+
 /// What `--refit` found.
 #[derive(Debug, Clone, Serialize)]
 pub struct Refits {
@@ -224,7 +227,7 @@ pub(super) fn refit(
     rows: &[Measurement],
     linear: &Verdict,
     diagnosed: &[Diagnosed],
-    step_of: &dyn Fn(&Diagnosed) -> Result<(f64, Vec<f64>)>,
+    step_of: &StepOf,
 ) -> Result<Option<(Verdict, Refits)>> {
     if !args.refit || linear.verdict == Kind::NoEffect {
         return Ok(None);
