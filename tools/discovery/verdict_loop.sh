@@ -12,7 +12,8 @@
 # Environment as hidden_effect.sh (setup.sh), and MENU (default models/li2022-menu.csv),
 # NOISE_MORE (the injected noise of the readings the menu adds; default 4 % of the peak shear
 # force and of the UCS, 2 deg of the outline-fit repose angle), SHIFT=PAIR.KEY=DELTA (moves
-# a parameter of the truth, as null_study.sh).
+# a parameter of the truth, as null_study.sh), TRUTH_MODEL (the truth's model file, default
+# the model's: a truth with an effect no candidate implements).
 set -euo pipefail
 effect=$1 strength=$2 out=$3 seed=${4:-1}
 source "$(dirname "$0")/setup.sh"
@@ -32,7 +33,7 @@ print(v["verdict"], ",".join(named or v["ambiguous"]) or "-")
 PY
 }
 
-"$tilth" synth --truth "$model" "${truth[@]}" --conditions "$out/conditions.csv" \
+"$tilth" synth --truth "${TRUTH_MODEL:-$model}" "${truth[@]}" --conditions "$out/conditions.csv" \
   --noise "$NOISE" --replicates "$R_DATA" --seed "$seed" --out "$out/data.csv" "${lab[@]}"
 "$tilth" diagnose --model "$model" --data "$out/data.csv" --out "$out/2-diagnose" \
   --param "$FREE" --replicates "$R" $DIAGNOSE "${lab[@]}" > /dev/null
@@ -42,7 +43,7 @@ final=$first final_names=$names
 if [ "$first" = ambiguous ]; then
   "$tilth" next --diagnosis "$out/2-diagnose" --menu "$menu" --out "$out/3-next" "${lab[@]}" > /dev/null
   suggestion=$(tail -n +2 "$out/3-next/conditions.csv" | head -1 | cut -d, -f1-4)
-  "$tilth" synth --truth "$model" "${truth[@]}" --conditions "$out/3-next/conditions.csv" \
+  "$tilth" synth --truth "${TRUTH_MODEL:-$model}" "${truth[@]}" --conditions "$out/3-next/conditions.csv" \
     --noise "$noise_all" --replicates "$R_DATA" --seed "$seed" --out "$out/3-next/measured.csv" "${lab[@]}"
   cp "$out/data.csv" "$out/data-2.csv"
   tail -n +2 "$out/3-next/measured.csv" >> "$out/data-2.csv"
