@@ -24,7 +24,7 @@ for seed in "$@"; do
   "$tilth" synth --truth "$model" --with "$effect=$strength" --conditions "$dir/conditions.csv" \
     --noise "$NOISE" --replicates "$R_DATA" --seed "$seed" --out "$dir/data.csv" $SCALE $LAB --quiet --cache "$cache" > /dev/null
   "$tilth" diagnose --model "$model" --data "$dir/data.csv" --out "$dir/2-diagnose" \
-    --param "$FREE" --replicates "$R" $DIAGNOSE $SCALE $LAB --quiet --cache "$cache" > /dev/null
+    --param "$FREE" --replicates "$R" --no-refit $DIAGNOSE $SCALE $LAB --quiet --cache "$cache" > /dev/null
   line=$(python3 - "$dir/2-diagnose/diagnosis.json" "$seed" "$effect" <<'PY'
 import json, sys
 c = json.load(open(sys.argv[1]))["candidates"]

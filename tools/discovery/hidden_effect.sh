@@ -31,7 +31,7 @@ source "$(dirname "$0")/setup.sh"
 "$tilth" compare --model "$model" --data "$out/data.csv" --out "$out/1-compare" \
   --replicates "$R_JUDGE" $SCALE $LAB --quiet --cache "$cache" > /dev/null
 "$tilth" diagnose --model "$model" --data "$out/data.csv" --out "$out/2-diagnose" \
-  --param "$FREE" --replicates "$R" $DIAGNOSE $SCALE $LAB --quiet --cache "$cache" > /dev/null
+  --param "$FREE" --replicates "$R" --no-refit $DIAGNOSE $SCALE $LAB --quiet --cache "$cache" > /dev/null
 # The first candidate's strength, free in [0, max(3 x its estimate, 2 x its step)] from the
 # estimate: what a user knows after the diagnosis (the hidden strength is not used).
 top=$(python3 - "$out/2-diagnose/diagnosis.json" "$model" <<'PY'

@@ -24,7 +24,7 @@ for s in $(seq 1 "$seeds"); do
   "$tilth" synth --truth "$model" "${shift_truth[@]}" --conditions "$out/conditions.csv" --noise "$NOISE" \
     --replicates "$R" --seed "$s" --out "$out/seed-$s/data.csv" $SCALE $LAB --quiet --cache "$cache"
   "$tilth" diagnose --model "$model" --data "$out/seed-$s/data.csv" --out "$out/seed-$s/diagnose" \
-    --param "$FREE" --replicates "$R" ${PARAM_STEP:+--param-step "$PARAM_STEP"} $DIAGNOSE $SCALE $LAB --quiet --cache "$cache" > /dev/null
+    --param "$FREE" --replicates "$R" --no-refit ${PARAM_STEP:+--param-step "$PARAM_STEP"} $DIAGNOSE $SCALE $LAB --quiet --cache "$cache" > /dev/null
 done
 python3 - "$out" "$seeds" <<'PY'
 import json, sys

@@ -20,7 +20,7 @@ source "$(dirname "$0")/setup.sh"
 for dir in "$proof"/rate-*/seed* "$proof"/null/seed-*; do
   [ -f "$dir/$sub/diagnosis.json" ] && continue
   "$tilth" diagnose --model "$model" --data "$dir/data.csv" --out "$dir/$sub" \
-    --param "$FREE" --param-step "$step" --replicates "$R" $DIAGNOSE $SCALE $LAB --quiet \
+    --param "$FREE" --param-step "$step" --replicates "$R" --no-refit $DIAGNOSE $SCALE $LAB --quiet \
     --cache "$proof/cache" > /dev/null
   echo "$dir/$sub"
 done

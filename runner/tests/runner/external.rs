@@ -322,6 +322,7 @@ fn diagnose_on_slurm_runs_its_variants_as_one_array_with_the_local_numbers() {
             "2",
             "--param",
             "soil-soil.rolling_friction=0.05:0.45",
+            "--no-refit",
         ];
         lab_json(&args, &data, out, slurm, "diagnosis.json")["candidates"].clone()
     };

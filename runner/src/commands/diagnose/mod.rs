@@ -79,13 +79,14 @@ pub struct DiagnoseArgs {
     /// partly mimic is absorbed too (docs/discovery-proof.md, "A free parameter off").
     #[arg(long)]
     pub fit_first: bool,
-    /// Fit each contender (a candidate or probe the linear verdict found significant or kept,
-    /// with a positive strength) with the free parameters on simulations (`tilth fit`, into
-    /// DIR/refit/NAME/) and give the verdict from the fits: the one contender whose fitted
-    /// chi^2 is within the noise is named, several are ambiguous, none is
-    /// none_of_the_candidates. Costs one fit per contender (docs/discovery.md, "--refit").
+    /// Give the linear verdict only. By default the free parameters alone and then each
+    /// contender with them (a candidate or probe the linear verdict found significant, kept,
+    /// or scored at a corrected p under 0.1) are fitted on simulations (`tilth fit`, into
+    /// DIR/refit/), and the verdict is the fits': one contender needed and within the noise
+    /// is named, several are ambiguous, none is none_of_the_candidates (docs/discovery.md,
+    /// "Refitting the contenders"). That costs one fit per contender.
     #[arg(long)]
-    pub refit: bool,
+    pub no_refit: bool,
     /// Levenberg-Marquardt iterations, at most, of each fit (--fit-first, --refit; see `tilth fit`).
     #[arg(long, default_value_t = 3)]
     pub fit_iterations: usize,

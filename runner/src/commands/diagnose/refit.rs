@@ -1,4 +1,5 @@
-//! `diagnose --refit`: each contender fitted on simulations, not extrapolated.
+//! `diagnose`'s refit (unless `--no-refit`): each contender fitted on simulations, not
+//! extrapolated.
 //!
 //! The linear verdict scores every candidate by one finite difference at the model. An
 //! effect several steps strong is then extrapolated: its one-step strength is off and the
@@ -67,7 +68,7 @@ pub struct NullFit {
 /// A contender's finite-difference step and, for a held parameter, the model's values of it.
 pub(super) type StepOf<'a> = dyn Fn(&Diagnosed) -> Result<(f64, Vec<f64>)> + 'a;
 
-/// What `--refit` found.
+/// What the refit found.
 #[derive(Debug, Clone, Serialize)]
 pub struct Refits {
     pub free: NullFit,
@@ -144,13 +145,18 @@ fn read_fit(dir: &Path) -> Result<Fitted> {
     })
 }
 
-/// `tilth fit` of the free parameters and `extra` into `dir`.
-fn fit_into(args: &DiagnoseArgs, data: &Path, dir: &Path, extra: Option<&str>) -> Result<Fitted> {
+/// `tilth fit` of `model`'s free parameters and `extra` into `dir`.
+fn fit_into(
+    args: &DiagnoseArgs,
+    (model, data): (&Path, &Path),
+    dir: &Path,
+    extra: Option<&str>,
+) -> Result<Fitted> {
     std::fs::create_dir_all(dir)?;
     let mut params = args.params.clone();
     params.extend(extra.map(String::from));
     let fit = crate::commands::fit::FitArgs {
-        model: args.model.clone(),
+        model: model.to_path_buf(),
         data: data.to_path_buf(),
         params,
         from_diagnosis: None,
@@ -220,8 +226,8 @@ fn refitted_verdict(
     }
 }
 
-/// With `--refit`, the free parameters' fit, every contender's, and the verdict they give;
-/// None without `--refit`, after a `no_effect` verdict, or with no contender.
+/// The free parameters' fit, every contender's, and the verdict they give; None with
+/// `--no-refit`, after a `no_effect` verdict, or with no contender.
 pub(super) fn refit(
     args: &DiagnoseArgs,
     rows: &[Measurement],
@@ -229,7 +235,7 @@ pub(super) fn refit(
     diagnosed: &[Diagnosed],
     step_of: &StepOf,
 ) -> Result<Option<(Verdict, Refits)>> {
-    if !args.refit || linear.verdict == Kind::NoEffect {
+    if args.no_refit || linear.verdict == Kind::NoEffect {
         return Ok(None);
     }
     let chosen = contenders(linear, diagnosed, args.alpha);
@@ -260,8 +266,11 @@ pub(super) fn refit(
         read_fit(&free_dir)?
     } else {
         say("the free parameters alone");
-        fit_into(args, &data, &free_dir, None)?
+        fit_into(args, (&args.model, &data), &free_dir, None)?
     };
+    // Each contender's fit starts where the free parameters' ended (the fitted model), so
+    // that it begins at the null model's chi^2 shifted only by the contender.
+    let free_model = free_dir.join("model.toml");
     let free_p = chi2_sf(free.chi2, free.dof);
     let mut fits = vec![];
     for d in &chosen {
@@ -269,7 +278,7 @@ pub(super) fn refit(
         let (step, held_values) = step_of(d)?;
         let param = contender_param(d, step, &held_values);
         let dir = root.join(d.score.name.replace(':', "-"));
-        let f = fit_into(args, &data, &dir, Some(&param))
+        let f = fit_into(args, (&free_model, &data), &dir, Some(&param))
             .with_context(|| format!("refitting {}", d.score.name))?;
         let p_value = chi2_sf(f.chi2, f.dof);
         fits.push(Contender {

@@ -217,11 +217,11 @@ fn called(name: &str) -> String {
 }
 
 /// The verdict in words: what the data call for, and what to do next.
-/// The contenders' fits on simulations (`--refit`), and how the verdict follows from them.
+/// The contenders' fits on simulations, and how the verdict follows from them.
 fn refit_table(r: &Refits, alpha: f64) -> String {
     let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();
     let mut md = format!(
-        "Refitted on simulations (--refit; `tilth fit` in DIR/refit/): the free parameters alone leave chi^2 {:.1} on {} degrees of freedom (p {}); each contender fitted with them:\n\n\
+        "Refitted on simulations (`tilth fit` in DIR/refit/; --no-refit skips it): the free parameters alone leave chi^2 {:.1} on {} degrees of freedom (p {}); each contender fitted with them:\n\n\
          | contender | fitted strength | standard error | chi^2 | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise |\n|---|---|---|---|---|---|---|---|---|---|\n",
         r.free.chi2,
         r.free.dof,
