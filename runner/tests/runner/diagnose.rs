@@ -462,4 +462,46 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
     }
     let md = std::fs::read_to_string(out_dir.join("diagnosis.md")).unwrap();
     assert!(md.contains("Refitted on simulations"), "{md}");
+    // `next` on refitted rivals simulates each rival's fitted model, not its linear step.
+    if fits.len() >= 2 {
+        let rivals: Vec<&str> = fits.iter().map(|f| f["name"].as_str().unwrap()).collect();
+        let menu = dir.join("menu.csv");
+        std::fs::write(&menu, "test,moisture_pct\nrepose,6\n").unwrap();
+        let next_dir = dir.join("next");
+        let o = tilth(&[
+            "next",
+            "--diagnosis",
+            out_dir.to_str().unwrap(),
+            "--menu",
+            menu.to_str().unwrap(),
+            "--out",
+            next_dir.to_str().unwrap(),
+            "--rivals",
+            &rivals.join(","),
+            "--coarse",
+            "--cores",
+            "2",
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let next: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(next_dir.join("next.json")).unwrap()).unwrap();
+        assert_eq!(next["mode"], "fitted");
+        let option = &next["options"][0];
+        assert_eq!(
+            option["pairs"].as_array().unwrap().len(),
+            rivals.len() * (rivals.len() - 1)
+        );
+        for rival in &rivals {
+            assert!(
+                next_dir.join(format!("runs/fitted-{rival}")).is_dir(),
+                "{rival}"
+            );
+        }
+        assert!(
+            std::fs::read_to_string(next_dir.join("conditions.csv"))
+                .unwrap()
+                .starts_with("test,")
+        );
+    }
 }

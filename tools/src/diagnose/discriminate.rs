@@ -101,6 +101,68 @@ pub fn separations(
     out
 }
 
+/// New readings simulated with each rival's fitted model (`diagnose`'s refit): per rival,
+/// per reading, the values of the replicates (the same seeds for every rival), and per
+/// reading the variance a measurement of it carries, lab^2 / specimens.
+pub struct Fitted<'a> {
+    pub names: &'a [String],
+    /// [rival][reading][replicate].
+    pub values: &'a [Vec<Vec<f64>>],
+    pub lab_var: &'a [f64],
+}
+
+/// Every ordered pair's separation on new readings when the rivals are fitted models: with
+/// a the truth, a measurement y_i of reading i compared with rival b's prediction has mean
+/// mu_a,i - mu_b,i and variance sigma_i^2 = lab_i^2 / specimens + s_b,i^2 / R (b's
+/// prediction from R runs), so the test along the predicted difference has noncentrality
+///
+///   lambda(a -> b) = sum_i (mu_a,i - mu_b,i)^2 / sigma_i^2.
+///
+/// mu_a - mu_b is estimated by the mean per-seed difference d_i (common seeds), whose own
+/// variance var(d_i) / R is reported as noise and taken off before the power. Unlike
+/// [`separations`], b is not refitted to the new readings: the free parameters could take
+/// up part of the difference, so this is an upper bound of what the measurement adds.
+pub fn fitted_separations(f: &Fitted, alpha: f64) -> Vec<Separation> {
+    let k = f.names.len();
+    assert_eq!(f.values.len(), k, "one set of values per rival");
+    let z = Normal::new(0.0, 1.0)
+        .expect("standard normal")
+        .inverse_cdf(1.0 - alpha / 2.0);
+    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+    let var = |x: &[f64]| {
+        let m = mean(x);
+        x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() as f64 - 1.0)
+    };
+    let mut out = vec![];
+    for b in 0..k {
+        for a in (0..k).filter(|&a| a != b) {
+            let (mut noncentrality, mut noise) = (0.0, 0.0);
+            for (i, lab_var) in f.lab_var.iter().enumerate() {
+                let (ya, yb) = (&f.values[a][i], &f.values[b][i]);
+                let r = ya.len().min(yb.len());
+                if r < 2 {
+                    continue;
+                }
+                let d: Vec<f64> = ya.iter().zip(yb).map(|(x, y)| x - y).collect();
+                let sigma2 = lab_var + var(&yb[..r]) / r as f64;
+                if !(sigma2 > 0.0) {
+                    continue;
+                }
+                noncentrality += mean(&d).powi(2) / sigma2;
+                noise += var(&d) / r as f64 / sigma2;
+            }
+            out.push(Separation {
+                truth: f.names[a].clone(),
+                rival: f.names[b].clone(),
+                noncentrality,
+                noise,
+                power: power(noncentrality - noise, z),
+            });
+        }
+    }
+    out
+}
+
 /// P(|Z + sqrt(lambda)| > z), Z standard normal: a 1-df chi^2 test's power.
 fn power(lambda: f64, z: f64) -> f64 {
     let n = Normal::new(0.0, 1.0).expect("standard normal");
@@ -174,6 +236,36 @@ mod tests {
         let s = separations(&rows, &names, &[1.0, 1.0], 0.01);
         let ab = s.iter().find(|x| x.truth == "a").unwrap();
         assert!(ab.noncentrality < 1e-12, "{ab:?}");
+    }
+
+    #[test]
+    fn fitted_rivals_are_separated_by_their_predicted_difference() {
+        // Reading 0: a predicts 2 more than b, seed by seed (no noise in the difference);
+        // reading 1: identical. Lab variance 1, b's 4 runs 10..13 (sample variance 5/3):
+        // sigma^2 = 1 + 5/12, lambda = 4 / sigma^2 both ways, no noise.
+        let names = vec!["a".to_string(), "b".to_string()];
+        let b0 = [10.0, 11.0, 12.0, 13.0];
+        let b0_var = 5.0 / 3.0; // sample variance of 10..13
+        let values = vec![
+            vec![
+                b0.iter().map(|v| v + 2.0).collect(),
+                vec![1.0, 2.0, 3.0, 4.0],
+            ],
+            vec![b0.to_vec(), vec![1.0, 2.0, 3.0, 4.0]],
+        ];
+        let f = Fitted {
+            names: &names,
+            values: &values,
+            lab_var: &[1.0, 1.0],
+        };
+        let s = fitted_separations(&f, 0.01);
+        assert_eq!(s.len(), 2);
+        let want = 4.0 / (1.0 + b0_var / 4.0);
+        for p in &s {
+            assert!((p.noncentrality - want).abs() < 1e-12, "{p:?}");
+            assert_eq!(p.noise, 0.0);
+            assert!((p.power - power(want, 2.5758293035489004)).abs() < 1e-9);
+        }
     }
 
     #[test]

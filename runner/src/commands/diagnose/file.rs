@@ -21,6 +21,23 @@ pub struct DiagnosisFile {
     pub candidates: Vec<CandidateIn>,
     pub rows: Vec<serde_json::Value>,
     pub columns: ColumnsIn,
+    /// The contenders' fits (absent with `--no-refit`).
+    #[serde(default)]
+    pub refit: Option<RefitIn>,
+}
+
+/// The refit, as far as it is read back.
+#[derive(Deserialize)]
+pub struct RefitIn {
+    pub contenders: Vec<ContenderIn>,
+}
+
+/// One contender's fit: its name, fitted strength and directory (with `model.toml`).
+#[derive(Deserialize)]
+pub struct ContenderIn {
+    pub name: String,
+    pub strength: f64,
+    pub dir: PathBuf,
 }
 
 /// A `--probe PAIR.KEY=STEP` of the diagnosis.

@@ -32,6 +32,7 @@ use std::path::{Path, PathBuf};
 use tilth_tools::diagnose::discriminate::{Rows, Separation, separations, worst};
 use tilth_tools::diagnose::verdict::Kind;
 
+mod fitted;
 mod report;
 use report::{report, write_conditions};
 
@@ -89,14 +90,83 @@ struct Variant {
 }
 
 pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
-    let set = args.lab.set.parse()?;
     let (d, rivals, path) = load(args)?;
     let model = Model::load(&std::path::absolute(&d.model)?)?;
-    let variants = variants_of(&d, &model, &args.diagnosis, &rivals)?;
     let menu = read_menu(&args.menu)?;
     check_against_model(&menu, &model, &args.menu)?;
     let noise = parse_noise(&args.noise)?;
+    let (strengths, baseline, mut options, mode) = match fitted::fitted_rivals(&d, &rivals) {
+        Some(models) => {
+            let measured = Measured {
+                values: &[],
+                variants: &[],
+                replicates: d.replicates,
+                params: d.free_parameters.len(),
+                noise: &noise,
+                specimens: args.specimens,
+            };
+            let options = fitted::fitted_options(args, &d, &rivals, &models, &menu, &measured)?;
+            let strengths = models.iter().map(|m| m.1).collect();
+            (strengths, vec![], options, "fitted")
+        }
+        None => {
+            let (strengths, baseline, options) =
+                linear_options(args, (&d, &path), &model, &rivals, (&menu, &noise))?;
+            (strengths, baseline, options, "linear")
+        }
+    };
+    if options.is_empty() {
+        bail!(
+            "{}: no measurement of the menu could be scored",
+            args.menu.display()
+        );
+    }
+    options.sort_by(|a, b| b.separation.total_cmp(&a.separation));
+    std::fs::create_dir_all(&args.out)?;
+    write_conditions(
+        &args.out.join("conditions.csv"),
+        &options[..args.top.min(options.len())],
+    )?;
+    let now = worst(&baseline).cloned();
+    let json = serde_json::json!({
+        "diagnosis": args.diagnosis.display().to_string(),
+        "menu": args.menu.display().to_string(),
+        "mode": mode,
+        "rivals": rivals,
+        "strengths": strengths,
+        "alpha": d.alpha,
+        "specimens": args.specimens,
+        "noise": args.noise,
+        "now": baseline,
+        "options": options,
+    });
+    std::fs::write(
+        args.out.join("next.json"),
+        serde_json::to_vec_pretty(&json)?,
+    )?;
+    let md = report(args, (&rivals, &strengths, mode), now.as_ref(), &options);
+    std::fs::write(args.out.join("next.md"), &md)?;
+    out.write_all(md.as_bytes())?;
+    writeln!(
+        out,
+        "\nwritten: {}/next.{{json,md}}, conditions.csv",
+        args.out.display()
+    )?;
+    Ok(())
+}
 
+/// The linearised ranking: the menu simulated with the diagnosis's own variants, each
+/// measurement scored by [`separations`] with the rivals at their one-step strengths.
+/// Returns the strengths, the separations on the diagnosed rows alone, and the options.
+fn linear_options(
+    args: &NextArgs,
+    (d, path): (&Diagnosis, &Path),
+    model: &Model,
+    rivals: &[String],
+    (menu, noise): (&[Measurement], &BTreeMap<String, Noise>),
+) -> Result<(Vec<f64>, Vec<Separation>, Vec<Suggestion>)> {
+    let set = args.lab.set.parse()?;
+    let variants = variants_of(d, model, &args.diagnosis, rivals)?;
     // Simulate every menu row with every variant, seeds R+1..2R as the diagnosis's
     // finite differences.
     let r = d.replicates;
@@ -118,21 +188,20 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
             set: &set,
         })
         .collect();
-    prefetch(&menu, &hows)?;
+    prefetch(menu, &hows)?;
     let mut values: Vec<Vec<Vec<f64>>> = vec![];
     for (k, v) in variants.iter().enumerate() {
         if !args.lab.quiet {
             eprintln!("variant {} of {}: {}", k + 1, variants.len(), v.name);
         }
         values.push(
-            simulate(&menu, &hows[k], &stop)?
+            simulate(menu, &hows[k], &stop)?
                 .into_iter()
                 .map(|s| s.0)
                 .collect(),
         );
     }
-
-    let old = old_rows(&d, &rivals, &path)?;
+    let old = old_rows(d, rivals, path)?;
     let strengths: Vec<f64> = rivals
         .iter()
         .map(|n| {
@@ -144,59 +213,23 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
         })
         .collect::<Result<_>>()?;
     let p = d.free_parameters.len();
-    let baseline = separations(&old, &rivals, &strengths, d.alpha);
+    let baseline = separations(&old, rivals, &strengths, d.alpha);
     let measured = Measured {
         values: &values,
         variants: &variants,
         replicates: r,
         params: p,
-        noise: &noise,
+        noise,
         specimens: args.specimens,
     };
     let rivals_at = Rivals {
-        names: &rivals,
+        names: rivals,
         strengths: &strengths,
         alpha: d.alpha,
     };
     let runs = (2 + p + d.candidates.len()) * r;
-    let mut options = score(&menu, &measured, &old, &rivals_at, runs);
-    if options.is_empty() {
-        bail!(
-            "{}: no measurement of the menu could be scored",
-            args.menu.display()
-        );
-    }
-    options.sort_by(|a, b| b.separation.total_cmp(&a.separation));
-    std::fs::create_dir_all(&args.out)?;
-    write_conditions(
-        &args.out.join("conditions.csv"),
-        &options[..args.top.min(options.len())],
-    )?;
-    let now = worst(&baseline).cloned();
-    let json = serde_json::json!({
-        "diagnosis": args.diagnosis.display().to_string(),
-        "menu": args.menu.display().to_string(),
-        "rivals": rivals,
-        "strengths": strengths,
-        "alpha": d.alpha,
-        "specimens": args.specimens,
-        "noise": args.noise,
-        "now": baseline,
-        "options": options,
-    });
-    std::fs::write(
-        args.out.join("next.json"),
-        serde_json::to_vec_pretty(&json)?,
-    )?;
-    let md = report(args, &rivals, &strengths, now.as_ref(), &options);
-    std::fs::write(args.out.join("next.md"), &md)?;
-    out.write_all(md.as_bytes())?;
-    writeln!(
-        out,
-        "\nwritten: {}/next.{{json,md}}, conditions.csv",
-        args.out.display()
-    )?;
-    Ok(())
+    let options = score(menu, &measured, &old, &rivals_at, runs);
+    Ok((strengths, baseline, options))
 }
 
 /// The diagnosis in `path`, checked against the options, and the rivals to separate.

@@ -38,22 +38,35 @@ pub(super) fn write_conditions(path: &Path, options: &[Suggestion]) -> Result<()
     Ok(())
 }
 
+fn named(rivals: &[String], strengths: &[f64]) -> String {
+    rivals
+        .iter()
+        .zip(strengths)
+        .map(|(n, s)| format!("{n} {s:.4}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 pub(super) fn report(
     args: &NextArgs,
-    rivals: &[String],
-    strengths: &[f64],
+    (rivals, strengths, mode): (&[String], &[f64], &str),
     now: Option<&Separation>,
     options: &[Suggestion],
 ) -> String {
     let mut md = format!(
-        "# The next measurement: telling {} apart\n\nEach rival at its estimated strength ({}). The score of a measurement is the noncentrality of the test that would reject the wrong rival, for the pair hardest to tell apart once it is added, less what the finite differences' noise brings; the power is that test's at the diagnosis's alpha. {} specimen{} per measurement; the lab's noise {}.\n\n",
+        "# The next measurement: telling {} apart\n\n{} The power is that test's at the diagnosis's alpha. {} specimen{} per measurement; the lab's noise {}.\n\n",
         rivals.join(", "),
-        rivals
-            .iter()
-            .zip(strengths)
-            .map(|(n, s)| format!("{n} {s:.4}"))
-            .collect::<Vec<_>>()
-            .join(", "),
+        if mode == "fitted" {
+            format!(
+                "Each rival as the diagnosis fitted it on simulations ({}). The score of a measurement is the noncentrality of the test that would reject the wrong rival on it alone, sum (mu_a - mu_b)^2 / (lab^2 + s_b^2 / R) over its readings, for the pair hardest to tell apart, less what the runs' scatter brings to it; the rival is not refitted to the new readings, so this is an upper bound.",
+                named(rivals, strengths)
+            )
+        } else {
+            format!(
+                "Each rival at its estimated strength ({}). The score of a measurement is the noncentrality of the test that would reject the wrong rival, for the pair hardest to tell apart once it is added, less what the finite differences' noise brings.",
+                named(rivals, strengths)
+            )
+        },
         args.specimens,
         if args.specimens == 1 { "" } else { "s" },
         if args.noise.is_empty() {

@@ -1,0 +1,132 @@
+//! `tilth next` on a refitted diagnosis: every rival's fitted model (`DIR/refit/NAME/`)
+//! simulates the menu, and each measurement is scored by how far apart the rivals' predictions
+//! are against the noise a measurement of it carries
+//! ([`tilth_tools::diagnose::discriminate::fitted_separations`]). Nothing is linearised: a
+//! rival several steps strong predicts what it predicts.
+
+use super::{Measured, NextArgs, Suggestion, group};
+use crate::commands::compare::{Simulate, mean_sd, prefetch, simulate};
+use crate::commands::diagnose::file::DiagnosisFile;
+use crate::commands::measurements::Measurement;
+use crate::sweep::execute;
+use anyhow::Result;
+use std::path::PathBuf;
+use tilth_tools::diagnose::discriminate::{Fitted, fitted_separations, worst};
+
+/// Each rival's fitted model and strength, when the diagnosis refitted every one of them.
+pub(super) fn fitted_rivals(d: &DiagnosisFile, rivals: &[String]) -> Option<Vec<(PathBuf, f64)>> {
+    let refit = d.refit.as_ref()?;
+    rivals
+        .iter()
+        .map(|n| {
+            let c = refit.contenders.iter().find(|c| &c.name == n)?;
+            let model = c.dir.join("model.toml");
+            model.is_file().then_some((model, c.strength))
+        })
+        .collect()
+}
+
+/// Every menu measurement scored with the rivals' fitted models.
+pub(super) fn fitted_options(
+    args: &NextArgs,
+    d: &DiagnosisFile,
+    rivals: &[String],
+    models: &[(PathBuf, f64)],
+    menu: &[Measurement],
+    measured: &Measured,
+) -> Result<Vec<Suggestion>> {
+    let set = args.lab.set.parse()?;
+    let r = d.replicates;
+    let stop = execute::stop_on_signals()?;
+    let outs: Vec<PathBuf> = rivals
+        .iter()
+        .map(|n| {
+            args.out
+                .join("runs")
+                .join(format!("fitted-{}", n.replace(':', "-")))
+        })
+        .collect();
+    let hows: Vec<Simulate> = models
+        .iter()
+        .zip(&outs)
+        .map(|((model, _), o)| Simulate {
+            model,
+            data: &args.menu,
+            out: o,
+            replicates: r,
+            first_seed: 1,
+            lab: &args.lab,
+            set: &set,
+        })
+        .collect();
+    prefetch(menu, &hows)?;
+    let mut values: Vec<Vec<Vec<f64>>> = vec![];
+    for (k, how) in hows.iter().enumerate() {
+        if !args.lab.quiet {
+            eprintln!(
+                "rival {} of {}: {} as fitted",
+                k + 1,
+                rivals.len(),
+                rivals[k]
+            );
+        }
+        values.push(
+            simulate(menu, how, &stop)?
+                .into_iter()
+                .map(|s| s.0)
+                .collect(),
+        );
+    }
+    let runs = (2 + d.free_parameters.len() + d.candidates.len()) * r;
+    let mut options = vec![];
+    for (test, conditions, members) in group(menu) {
+        // Readings every rival ran completely, with the lab's variance of one measurement:
+        // --noise, else the runs' own scatter (their mean over the rivals).
+        let kept: Vec<usize> = members
+            .into_iter()
+            .filter(|&i| values.iter().all(|v| v[i].len() == r))
+            .collect();
+        let lab_var: Vec<f64> = kept
+            .iter()
+            .map(|&i| {
+                let scatter = values
+                    .iter()
+                    .map(|v| mean_sd(&v[i]).1.unwrap_or(0.0))
+                    .sum::<f64>()
+                    / values.len() as f64;
+                let mean = mean_sd(&values[0][i]).0;
+                let lab = measured
+                    .noise
+                    .get(&menu[i].observable)
+                    .map_or(scatter, |n| n.sd(mean));
+                lab * lab / measured.specimens as f64
+            })
+            .collect();
+        if kept.is_empty() {
+            continue;
+        }
+        let per_rival: Vec<Vec<Vec<f64>>> = values
+            .iter()
+            .map(|v| kept.iter().map(|&i| v[i].clone()).collect())
+            .collect();
+        let pairs = fitted_separations(
+            &Fitted {
+                names: rivals,
+                values: &per_rival,
+                lab_var: &lab_var,
+            },
+            d.alpha,
+        );
+        let w = worst(&pairs).expect("two rivals or more").clone();
+        options.push(Suggestion {
+            observables: kept.iter().map(|&i| menu[i].observable.clone()).collect(),
+            test,
+            conditions,
+            separation: w.noncentrality - w.noise,
+            power: w.power,
+            pairs,
+            runs,
+        });
+    }
+    Ok(options)
+}
