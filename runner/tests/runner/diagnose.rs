@@ -462,9 +462,11 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
     }
     let md = std::fs::read_to_string(out_dir.join("diagnosis.md")).unwrap();
     assert!(md.contains("Refitted on simulations"), "{md}");
-    // `next` on refitted rivals simulates each rival's fitted model, not its linear step.
-    if fits.len() >= 2 {
-        let rivals: Vec<&str> = fits.iter().map(|f| f["name"].as_str().unwrap()).collect();
+    // `next` on refitted rivals simulates each rival's fitted model, not its linear step;
+    // `free`, the free parameter's own fit, is the rival "no effect".
+    {
+        let mut rivals: Vec<&str> = fits.iter().map(|f| f["name"].as_str().unwrap()).collect();
+        rivals.push("free");
         let menu = dir.join("menu.csv");
         std::fs::write(&menu, "test,moisture_pct\nrepose,6\n").unwrap();
         let next_dir = dir.join("next");

@@ -29,7 +29,14 @@ pub struct DiagnosisFile {
 /// The refit, as far as it is read back.
 #[derive(Deserialize)]
 pub struct RefitIn {
+    pub free: NullIn,
     pub contenders: Vec<ContenderIn>,
+}
+
+/// The free parameters' own fit.
+#[derive(Deserialize)]
+pub struct NullIn {
+    pub dir: PathBuf,
 }
 
 /// One contender's fit: its name, fitted strength and directory (with `model.toml`).

@@ -118,6 +118,9 @@ pub(super) fn report(args: &DiagnoseArgs, f: &Findings) -> String {
         md += &refit_table(fits, args.alpha);
     }
     md += &verdict_words(verdict, &args.out);
+    if let Some(r) = refits.filter(|_| verdict.verdict == Kind::NoEffect) {
+        md += &not_excluded(r, &args.out);
+    }
     for c in d.iter().filter(|c| !c.score.identifiable) {
         md += &match c.score.unidentified {
             Some(Unidentified::Absorbed) => format!(
@@ -217,6 +220,25 @@ fn called(name: &str) -> String {
 }
 
 /// The verdict in words: what the data call for, and what to do next.
+/// After a refitted `no_effect`: the effects that fit within the noise too, with their
+/// fitted strengths, and how to tell one from the free parameters.
+fn not_excluded(r: &Refits, out: &std::path::Path) -> String {
+    let fits: Vec<String> = r
+        .contenders
+        .iter()
+        .filter(|c| c.within_noise && c.strength > 0.0 && !c.name.starts_with(HELD))
+        .map(|c| format!("{} (fitted {:.4})", c.name, c.strength))
+        .collect();
+    if fits.is_empty() {
+        return String::new();
+    }
+    format!(
+        " These data need no effect, but they do not exclude {}: each fits within the noise beside the free parameters. To tell one from the free parameters, `tilth next --diagnosis {} --menu MENU --rivals free,NAME` ranks the measurements that would.",
+        fits.join(", "),
+        out.display()
+    )
+}
+
 /// The contenders' fits on simulations, and how the verdict follows from them.
 fn refit_table(r: &Refits, alpha: f64) -> String {
     let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();

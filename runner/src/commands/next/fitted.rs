@@ -13,15 +13,25 @@ use anyhow::Result;
 use std::path::PathBuf;
 use tilth_tools::diagnose::discriminate::{Fitted, fitted_separations, worst};
 
-/// Each rival's fitted model and strength, when the diagnosis refitted every one of them.
+/// The rival that stands for "no effect": the free parameters' own fit.
+pub const FREE: &str = "free";
+
+/// Each rival's fitted model and strength, when the diagnosis refitted every one of them
+/// ([`FREE`] is the free parameters' fit, at strength 0).
 pub(super) fn fitted_rivals(d: &DiagnosisFile, rivals: &[String]) -> Option<Vec<(PathBuf, f64)>> {
     let refit = d.refit.as_ref()?;
     rivals
         .iter()
         .map(|n| {
-            let c = refit.contenders.iter().find(|c| &c.name == n)?;
-            let model = c.dir.join("model.toml");
-            model.is_file().then_some((model, c.strength))
+            let (dir, strength) = match n.as_str() {
+                FREE => (&refit.free.dir, 0.0),
+                _ => {
+                    let c = refit.contenders.iter().find(|c| &c.name == n)?;
+                    (&c.dir, c.strength)
+                }
+            };
+            let model = dir.join("model.toml");
+            model.is_file().then_some((model, strength))
         })
         .collect()
 }

@@ -109,6 +109,10 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
             let strengths = models.iter().map(|m| m.1).collect();
             (strengths, vec![], options, "fitted")
         }
+        None if rivals.iter().any(|r| r == fitted::FREE) => bail!(
+            "--rivals {}: the free parameters' fit is a rival only of a refitted diagnosis (one made without --no-refit)",
+            rivals.join(",")
+        ),
         None => {
             let (strengths, baseline, options) =
                 linear_options(args, (&d, &path), &model, &rivals, (&menu, &noise))?;
