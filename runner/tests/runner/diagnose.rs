@@ -418,7 +418,7 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
         .as_array()
         .expect("refit: the linear verdict has contenders");
     assert!(!fits.is_empty());
-    let mut chosen = vec![];
+    let (mut chosen, mut kept) = (vec![], vec![]);
     for f in fits {
         let name = f["name"].as_str().unwrap();
         let fit = read(f["dir"].as_str().unwrap());
@@ -435,13 +435,41 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
             "{name}: {f}"
         );
         assert_eq!(f["within_noise"].as_bool(), Some(p >= 0.01), "{name}");
+        // The rows' standardised residuals that Vuong's test compares: chi^2 is their sum
+        // of squares.
+        let z: Vec<f64> = f["z"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(z.len(), 8, "{name}");
+        assert!((z.iter().map(|v| v * v).sum::<f64>() - chi2).abs() < 1e-9 * chi2.max(1.0));
         let needed = chi2 < free_chi2 && f["p_needed"].as_f64().unwrap() < 0.01;
         assert_eq!(f["needed"].as_bool(), Some(needed), "{name}");
-        if needed && p >= 0.01 {
+        let excluded = f["p_worse"].as_f64().is_some_and(|p| p < 0.01);
+        assert_eq!(f["excluded"].as_bool(), Some(excluded), "{name}");
+        if needed {
             chosen.push((chi2, name.to_string(), fit["estimate"][1].as_f64().unwrap()));
+            kept.push(!excluded);
         }
     }
-    chosen.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // The best needed contender, if within the noise, with every needed one not excluded.
+    let mut order: Vec<usize> = (0..chosen.len()).collect();
+    order.sort_by(|&a, &b| chosen[a].0.total_cmp(&chosen[b].0));
+    let best_within = order.first().is_some_and(|&b| {
+        let h = chosen[b].0 / 2.0;
+        (-h).exp() * (1.0 + h + h * h / 2.0) >= 0.01
+    });
+    let chosen: Vec<(f64, String, f64)> = if best_within {
+        order
+            .iter()
+            .filter(|&&k| kept[k])
+            .map(|&k| chosen[k].clone())
+            .collect()
+    } else {
+        vec![]
+    };
     let v = &json["verdict"];
     let any_needed = fits.iter().any(|f| f["needed"] == true);
     match chosen.as_slice() {

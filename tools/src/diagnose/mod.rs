@@ -49,6 +49,7 @@ use serde::Serialize;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 pub mod discriminate;
+pub mod nonnested;
 pub mod verdict;
 
 /// Below this fraction of its signature left after the free parameters, a candidate is

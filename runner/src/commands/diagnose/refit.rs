@@ -52,6 +52,13 @@ pub struct Contender {
     pub p_needed: f64,
     pub needed: bool,
     pub within_noise: bool,
+    /// Against the best needed contender: Vuong's one-sided p that it fits no worse,
+    /// Holm-corrected over the others (None for the best itself or one not needed).
+    pub p_worse: Option<f64>,
+    /// Its fit is worse than the best's beyond doubt (p_worse < alpha).
+    pub excluded: bool,
+    /// Each row's standardised residual at the fit.
+    pub z: Vec<f64>,
     pub dir: String,
 }
 
@@ -125,6 +132,7 @@ struct Fitted {
     dof: f64,
     estimate: f64,
     standard_error: Option<f64>,
+    z: Vec<f64>,
 }
 
 fn read_fit(dir: &Path) -> Result<Fitted> {
@@ -142,6 +150,9 @@ fn read_fit(dir: &Path) -> Result<Fitted> {
         dof: j["dof"].as_f64().unwrap_or(f64::NAN),
         estimate: last("estimate").unwrap_or(f64::NAN),
         standard_error: last("standard_error"),
+        z: (j["z"].as_array().into_iter().flatten())
+            .filter_map(|v| v.as_f64())
+            .collect(),
     })
 }
 
@@ -170,6 +181,36 @@ fn fit_into(
     read_fit(dir)
 }
 
+/// Each needed contender against the best needed one (the least chi^2), row by row
+/// ([`tilth_tools::diagnose::nonnested::vuong`]), Holm-corrected over them: `excluded` when
+/// its fit is worse beyond doubt. A chi^2 lower by a few rows' luck does not name the best.
+fn exclude_worse(fits: &mut [Contender], alpha: f64) {
+    use tilth_tools::diagnose::nonnested::{vuong, vuong_p};
+    let Some(best) = (0..fits.len())
+        .filter(|&k| fits[k].needed)
+        .min_by(|&a, &b| fits[a].chi2.total_cmp(&fits[b].chi2))
+    else {
+        return;
+    };
+    let others: Vec<usize> = (0..fits.len())
+        .filter(|&k| k != best && fits[k].needed)
+        .collect();
+    let raw: Vec<f64> = others
+        .iter()
+        .map(|&k| {
+            if fits[k].z.len() == fits[best].z.len() && !fits[k].z.is_empty() {
+                vuong_p(vuong(&fits[best].z, &fits[k].z))
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    for (&k, p) in others.iter().zip(tilth_tools::diagnose::holm_adjust(&raw)) {
+        fits[k].p_worse = Some(p);
+        fits[k].excluded = p < alpha;
+    }
+}
+
 /// The verdict the refits give, from the linear one (`encompassing` kept); `score` gives a
 /// contender's linear statistic and corrected p-value.
 fn refitted_verdict(
@@ -178,14 +219,15 @@ fn refitted_verdict(
     score: &dyn Fn(&str) -> (f64, f64),
 ) -> Verdict {
     let fits = &refits.contenders;
-    let mut ok: Vec<&Contender> = fits.iter().filter(|c| c.needed && c.within_noise).collect();
-    ok.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
-    let any_needed = fits.iter().any(|c| c.needed);
-    let best = ok.first().copied().or_else(|| {
-        fits.iter()
-            .filter(|c| c.needed)
-            .min_by(|a, b| a.chi2.total_cmp(&b.chi2))
-    });
+    let mut needed: Vec<&Contender> = fits.iter().filter(|c| c.needed).collect();
+    needed.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
+    let any_needed = !needed.is_empty();
+    let best = needed.first().copied();
+    // The best if it is within the noise, and every needed rival not excluded beside it.
+    let ok: Vec<&Contender> = match best {
+        Some(b) if b.within_noise => needed.iter().copied().filter(|c| !c.excluded).collect(),
+        _ => vec![],
+    };
     let misfit = match best {
         Some(c) => (c.chi2, c.dof, c.p_value),
         None => (refits.free.chi2, refits.free.dof, refits.free.p_value),
@@ -293,6 +335,9 @@ pub(super) fn refit(
             p_needed: f64::NAN,
             needed: false,
             within_noise: p_value >= args.alpha,
+            p_worse: None,
+            excluded: false,
+            z: f.z,
             dir: dir.display().to_string(),
         });
     }
@@ -307,6 +352,7 @@ pub(super) fn refit(
         c.p_needed = p;
         c.needed = c.chi2_drop > 0.0 && p < args.alpha;
     }
+    exclude_worse(&mut fits, args.alpha);
     let refits = Refits {
         free: NullFit {
             chi2: free.chi2,
@@ -332,8 +378,8 @@ pub(super) fn refit(
 mod tests {
     use super::*;
 
-    /// A contender's fit: chi^2 on 14 dof, needed or not.
-    fn fit(name: &str, chi2: f64, needed: bool) -> Contender {
+    /// A contender's fit: chi^2 on 14 dof, needed or not, excluded beside the best or not.
+    fn fit(name: &str, chi2: f64, needed: bool, excluded: bool) -> Contender {
         let p_value = chi2_sf(chi2, 14.0);
         Contender {
             name: name.into(),
@@ -347,6 +393,9 @@ mod tests {
             p_needed: if needed { 1e-4 } else { 0.5 },
             needed,
             within_noise: p_value >= 0.01,
+            p_worse: None,
+            excluded,
+            z: vec![],
             dir: String::new(),
         }
     }
@@ -388,7 +437,10 @@ mod tests {
         // chi^2_14 at 0.01 is 29.14: 20 is within the noise, 35 and 60 are not.
         let one = v(refits(
             50.0,
-            vec![fit("fines", 20.0, true), fit("twisting", 35.0, true)],
+            vec![
+                fit("fines", 20.0, true, false),
+                fit("twisting", 35.0, true, true),
+            ],
         ));
         assert_eq!(one.verdict, Kind::Effect);
         assert_eq!(one.effects[0].name, "fines");
@@ -397,27 +449,52 @@ mod tests {
             (0.1, 0.01)
         );
         assert_eq!((one.misfit.chi2, one.misfit.dof), (20.0, 14));
+        // A rival not excluded beside the best stays, within the noise or not.
         let two = v(refits(
             50.0,
-            vec![fit("a", 25.0, true), fit("b", 18.0, true)],
+            vec![fit("a", 35.0, true, false), fit("b", 18.0, true, false)],
         ));
         assert_eq!(two.verdict, Kind::Ambiguous);
         assert_eq!(two.ambiguous, ["b", "a"], "best fit first");
         let none = v(refits(
             70.0,
-            vec![fit("a", 35.0, true), fit("b", 60.0, true)],
+            vec![fit("a", 35.0, true, false), fit("b", 60.0, true, true)],
         ));
         assert_eq!(none.verdict, Kind::NoneOfTheCandidates);
         assert_eq!(none.misfit.chi2, 35.0, "the best needed fit's misfit");
         // Within the noise but not needed: the free parameters explain the data.
         let null = v(refits(
             18.0,
-            vec![fit("a", 17.0, false), fit("b", 16.5, false)],
+            vec![fit("a", 17.0, false, false), fit("b", 16.5, false, false)],
         ));
         assert_eq!(null.verdict, Kind::NoEffect);
         assert_eq!(null.misfit.chi2, 18.0, "the free parameters' fit");
-        let unexplained = v(refits(45.0, vec![fit("a", 44.0, false)]));
+        let unexplained = v(refits(45.0, vec![fit("a", 44.0, false, false)]));
         assert_eq!(unexplained.verdict, Kind::NoneOfTheCandidates);
+    }
+
+    #[test]
+    fn a_rival_is_excluded_by_a_worse_fit_over_many_rows_not_by_one_row() {
+        let with_z = |name: &str, z: Vec<f64>| {
+            let mut c = fit(name, z.iter().map(|x| x * x).sum(), true, false);
+            c.z = z;
+            c
+        };
+        let best = with_z("best", vec![1.0; 16]);
+        let mut one_row = vec![1.0; 16];
+        one_row[0] = 17f64.sqrt();
+        let mut spread: Vec<f64> = vec![1.5; 16];
+        spread[3] = 1.4;
+        let mut fits = vec![with_z("one-row", one_row), best, with_z("spread", spread)];
+        exclude_worse(&mut fits, 0.01);
+        assert_eq!(fits[1].p_worse, None, "the best");
+        // One row: V = 1.03 (tools' nonnested tests), p 0.15 (Holm x2: 0.30).
+        assert!(
+            !fits[0].excluded && fits[0].p_worse.unwrap() > 0.1,
+            "{:?}",
+            fits[0].p_worse
+        );
+        assert!(fits[2].excluded, "{:?}", fits[2].p_worse);
     }
 
     #[test]

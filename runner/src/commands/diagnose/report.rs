@@ -244,14 +244,14 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
     let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();
     let mut md = format!(
         "Refitted on simulations (`tilth fit` in DIR/refit/; --no-refit skips it): the free parameters alone leave chi^2 {:.1} on {} degrees of freedom (p {}); each contender fitted with them:\n\n\
-         | contender | fitted strength | standard error | chi^2 | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise |\n|---|---|---|---|---|---|---|---|---|---|\n",
+         | contender | fitted strength | standard error | chi^2 | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise | p no worse than the best (Holm) | excluded |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         r.free.chi2,
         r.free.dof,
         p(r.free.p_value)
     );
     for c in &r.contenders {
         md += &format!(
-            "| {} | {:.4} | {} | {:.1} | {} | {} | {:.1} | {} | {} | {} |\n",
+            "| {} | {:.4} | {} | {:.1} | {} | {} | {:.1} | {} | {} | {} | {} | {} |\n",
             c.name,
             c.strength,
             c.standard_error.map_or("-".into(), |s| format!("{s:.4}")),
@@ -261,11 +261,13 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
             c.chi2_drop,
             p(c.p_needed),
             if c.needed { "yes" } else { "no" },
-            if c.within_noise { "yes" } else { "no" }
+            if c.within_noise { "yes" } else { "no" },
+            c.p_worse.map_or("-".into(), p),
+            if c.excluded { "yes" } else { "no" }
         );
     }
     md + &format!(
-        "\nNeeded: the drop from the free parameters' fit against chi^2(1), Holm-corrected, under {alpha}; within the noise: p >= {alpha}. The verdict below is the fits': one contender both needed and within the noise is named with its fitted strength, several are ambiguous, none is none of the candidates (or no effect when none is needed and the free parameters' fit is within the noise).\n\n"
+        "\nNeeded: the drop from the free parameters' fit against chi^2(1), Holm-corrected, under {alpha}; within the noise: p >= {alpha}. Excluded: its fit is worse than the best needed one's beyond doubt, row by row (Vuong's test, Holm-corrected, under {alpha}). The verdict below is the fits': the best needed contender, if within the noise, is named when every other needed one is excluded, and is ambiguous with those that are not; none is none of the candidates (or no effect when none is needed and the free parameters' fit is within the noise).\n\n"
     )
 }
 

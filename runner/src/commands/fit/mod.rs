@@ -542,6 +542,7 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         theta: b_theta,
         chi2: b_chi2,
         centre: b_centre,
+        se: b_se,
         jac,
         noise,
         ..
@@ -591,6 +592,9 @@ pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
         "jacobian_noise": (0..n).map(|j| (0..n).map(|k| noise[(j, k)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
         "correlation": corr,
         "chi2": b_chi2,
+        // Each row's (measured - simulated) / standard error at the estimate: chi2 is their
+        // sum of squares (diagnose's refit compares fits row by row).
+        "z": rows.iter().zip(&b_centre).zip(&b_se).map(|((m, c), s)| (m.value - c) / s).collect::<Vec<_>>(),
         "dof": dof,
         "rmse_start": first.rmse,
         "rmse": rmse(&rows, &b_centre),
