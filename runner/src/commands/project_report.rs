@@ -10,11 +10,12 @@
 //! fit with its model diff, in order (`project_story`).
 //! Plots are inlined (SVG); nothing is fetched.
 
+use super::project_story::{Step, StepKind, find_steps, story_html};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use tilth_tools::compare::plot::history_svg;
 
 #[derive(Debug, Args)]
@@ -24,36 +25,6 @@ pub struct ReportArgs {
     /// Where to write the page (default: PROJECT/report.html).
     #[arg(long)]
     pub out: Option<PathBuf>,
-}
-
-/// One compare run.
-struct Entry {
-    dir: PathBuf,
-    label: String,
-    created: f64,
-    json: serde_json::Value,
-}
-
-fn find(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> Result<()> {
-    let file = dir.join("compare.json");
-    if file.is_file() {
-        out.push(file);
-        // A compare run's subdirectories are its sweeps.
-        return Ok(());
-    }
-    if depth == 0 {
-        return Ok(());
-    }
-    let mut subs: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("{}: cannot read", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_dir())
-        .collect();
-    subs.sort();
-    for s in subs {
-        find(&s, depth - 1, out)?;
-    }
-    Ok(())
 }
 
 /// tilth's own SVG, ready to inline: anything before the first tag (an XML prolog) removed.
@@ -77,40 +48,18 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
     if !args.project.is_dir() {
         bail!("{}: not a directory", args.project.display());
     }
-    let mut files = vec![];
-    find(&args.project, 4, &mut files)?;
-    if files.is_empty() {
+    let steps = find_steps(&args.project)?;
+    let runs: Vec<&Step> = steps
+        .iter()
+        .filter(|s| s.kind == StepKind::Compare)
+        .collect();
+    if runs.is_empty() {
         bail!(
             "{}: no compare run below it (no compare.json within four levels); run `tilth compare --out {}/NAME ...` first",
             args.project.display(),
             args.project.display()
         );
     }
-    let mut runs = vec![];
-    for f in files {
-        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&f)?)
-            .with_context(|| format!("{}: not a compare.json", f.display()))?;
-        let created = json["created"].as_f64().unwrap_or_else(|| {
-            std::fs::metadata(&f)
-                .and_then(|m| m.modified())
-                .ok()
-                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-                .map_or(0.0, |d| d.as_secs_f64())
-        });
-        let dir = f.parent().unwrap().to_path_buf();
-        let label = dir
-            .strip_prefix(&args.project)
-            .unwrap_or(&dir)
-            .display()
-            .to_string();
-        runs.push(Entry {
-            dir,
-            label: if label.is_empty() { ".".into() } else { label },
-            created,
-            json,
-        });
-    }
-    runs.sort_by(|a, b| a.created.total_cmp(&b.created).then(a.label.cmp(&b.label)));
 
     // Observables over all runs, with their unit.
     let mut observables: BTreeMap<String, String> = BTreeMap::new();
@@ -124,8 +73,8 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
             observables.entry(o.clone()).or_default();
         }
     }
-    let rmse = |r: &Entry, o: &str| r.json["observables"][o]["rmse"].as_f64();
-    let mre = |r: &Entry, o: &str| r.json["observables"][o]["mean_relative_error"].as_f64();
+    let rmse = |r: &Step, o: &str| r.json["observables"][o]["rmse"].as_f64();
+    let mre = |r: &Step, o: &str| r.json["observables"][o]["mean_relative_error"].as_f64();
 
     let mut html = String::from(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tilth report</title>\n<style>\
@@ -157,10 +106,7 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     html += "</table>\n";
-    html += &super::project_story::story_html(
-        &super::project_story::find_steps(&args.project)?,
-        escape,
-    );
+    html += &story_html(&steps, escape);
 
     html += "<h2>Error per observable</h2>\n<p>RMSE in the observable's unit, and below it the mean relative error; \
              green where a run's RMSE fell from the run before it, red where it rose.</p>\n\
@@ -181,7 +127,7 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         );
         for (k, r) in runs.iter().enumerate() {
             let now = rmse(r, o);
-            let before = k.checked_sub(1).and_then(|p| rmse(&runs[p], o));
+            let before = k.checked_sub(1).and_then(|p| rmse(runs[p], o));
             let class = match (now, before) {
                 (Some(n), Some(b)) if n < b => " class=\"better\"",
                 (Some(n), Some(b)) if n > b => " class=\"worse\"",

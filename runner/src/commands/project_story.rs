@@ -40,6 +40,8 @@ impl StepKind {
 /// One step of the loop.
 pub struct Step {
     pub kind: StepKind,
+    /// The directory its file is in.
+    pub dir: PathBuf,
     /// Its directory relative to the project.
     pub label: String,
     /// Seconds since the epoch: `created` in the file, else the file's modification time.
@@ -75,6 +77,7 @@ pub fn find_steps(project: &Path) -> Result<Vec<Step>> {
                 .to_string();
             steps.push(Step {
                 kind,
+                dir: dir.clone(),
                 label: if label.is_empty() { ".".into() } else { label },
                 created,
                 json,

@@ -15,13 +15,7 @@ pub(super) fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Opt
     }
     let dir = args.out.join("fit");
     std::fs::create_dir_all(&dir)?;
-    let data = if args.tests.is_empty() {
-        args.data.clone()
-    } else {
-        let only = dir.join("data.csv");
-        crate::commands::measurements::write_measurements(&only, rows)?;
-        only
-    };
+    let data = data_for(args, rows, &dir)?;
     if !args.lab.quiet {
         eprintln!(
             "fitting the free parameters to the data first: {}",
@@ -41,6 +35,21 @@ pub(super) fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Opt
     };
     crate::commands::fit::fit(&fit, &mut std::io::sink())?;
     Ok(Some(std::path::absolute(dir.join("model.toml"))?))
+}
+
+/// The data a fit inside the diagnosis reads: the data file, or with `--tests` its rows of
+/// those tests written into `dir`.
+pub(super) fn data_for(
+    args: &DiagnoseArgs,
+    rows: &[Measurement],
+    dir: &std::path::Path,
+) -> Result<PathBuf> {
+    if args.tests.is_empty() {
+        return Ok(args.data.clone());
+    }
+    let only = dir.join("data.csv");
+    crate::commands::measurements::write_measurements(&only, rows)?;
+    Ok(only)
 }
 
 /// What the fit before the diagnosis moved: each free parameter's shift from the model's

@@ -286,13 +286,7 @@ pub(super) fn refit(
     }
     let root = args.out.join("refit");
     std::fs::create_dir_all(&root)?;
-    let data = if args.tests.is_empty() {
-        args.data.clone()
-    } else {
-        let only = root.join("data.csv");
-        crate::commands::measurements::write_measurements(&only, rows)?;
-        only
-    };
+    let data = super::fit_first::data_for(args, rows, &root)?;
     let say = |what: &str| {
         if !args.lab.quiet {
             eprintln!("refitting {what} on simulations");

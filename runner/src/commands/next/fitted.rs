@@ -11,7 +11,7 @@ use crate::commands::measurements::Measurement;
 use crate::sweep::execute;
 use anyhow::Result;
 use std::path::PathBuf;
-use tilth_tools::diagnose::discriminate::{Fitted, fitted_separations, worst};
+use tilth_tools::diagnose::discriminate::{Fitted, fitted_separations};
 
 /// The rival that stands for "no effect": the free parameters' own fit.
 pub const FREE: &str = "free";
@@ -127,16 +127,12 @@ pub(super) fn fitted_options(
             },
             d.alpha,
         );
-        let w = worst(&pairs).expect("two rivals or more").clone();
-        options.push(Suggestion {
-            observables: kept.iter().map(|&i| menu[i].observable.clone()).collect(),
-            test,
-            conditions,
-            separation: w.noncentrality - w.noise,
-            power: w.power,
+        let observables = kept.iter().map(|&i| menu[i].observable.clone()).collect();
+        options.push(Suggestion::new(
+            (test, conditions, observables),
             pairs,
             runs,
-        });
+        ));
     }
     Ok(options)
 }

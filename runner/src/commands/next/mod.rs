@@ -300,18 +300,34 @@ fn score(
             rivals.strengths,
             rivals.alpha,
         );
+        let observables = kept.iter().map(|&i| menu[i].observable.clone()).collect();
+        options.push(Suggestion::new(
+            (test, conditions, observables),
+            pairs,
+            runs,
+        ));
+    }
+    options
+}
+
+impl Suggestion {
+    /// A measurement scored by its hardest pair.
+    fn new(
+        (test, conditions, observables): (String, BTreeMap<String, f64>, Vec<String>),
+        pairs: Vec<Separation>,
+        runs: usize,
+    ) -> Suggestion {
         let w = worst(&pairs).expect("two rivals or more").clone();
-        options.push(Suggestion {
-            observables: kept.iter().map(|&i| menu[i].observable.clone()).collect(),
+        Suggestion {
             test,
             conditions,
+            observables,
             separation: w.noncentrality - w.noise,
             power: w.power,
             pairs,
             runs,
-        });
+        }
     }
-    options
 }
 
 /// The menu's runs, every variant's, and how a new reading is standardised.
