@@ -159,7 +159,7 @@ def reduce(out):
     rows = []
     with open(f"{out}.final.dump") as f:
         lines = f.read().splitlines()
-    start = lines.index(next(l for l in lines if l.startswith("ITEM: ATOMS"))) + 1
+    start = next(k for k, l in enumerate(lines) if l.startswith("ITEM: ATOMS")) + 1
     for line in lines[start:]:
         _, x, y, z, vx, vy, vz, r, m = map(float, line.split())
         rows.append((x, y, z, math.sqrt(vx * vx + vy * vy + vz * vz), r, m))

@@ -80,14 +80,15 @@ pub struct DiagnoseArgs {
     #[arg(long)]
     pub fit_first: bool,
     /// Give the linear verdict only. By default the free parameters alone and then each
-    /// contender with them (a candidate or probe the linear verdict found significant, kept,
-    /// or scored at a corrected p under 0.1) are fitted on simulations (`tilth fit`, into
-    /// DIR/refit/), and the verdict is the fits': one contender needed and within the noise
-    /// is named, several are ambiguous, none is none_of_the_candidates (docs/discovery.md,
+    /// contender with them (a candidate or probe the linear verdict kept or scored at a
+    /// corrected p under 0.1) are fitted on simulations (`tilth fit`, into DIR/refit/), and
+    /// the verdict is the fits': the best needed contender within the noise is named when
+    /// its rivals fit worse row by row, ambiguous with those that do not (docs/discovery.md,
     /// "Refitting the contenders"). That costs one fit per contender.
     #[arg(long)]
     pub no_refit: bool,
-    /// Levenberg-Marquardt iterations, at most, of each fit (--fit-first, --refit; see `tilth fit`).
+    /// Levenberg-Marquardt iterations, at most, of each fit (--fit-first and the refit; see
+    /// `tilth fit`).
     #[arg(long, default_value_t = 3)]
     pub fit_iterations: usize,
     /// Corrected p-value below which a candidate is called significant.
@@ -497,7 +498,6 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         })
         .collect();
     let refitted = {
-        let doc: toml_edit::DocumentMut = text.parse()?;
         let step_of = |d: &Diagnosed| -> Result<(f64, Vec<f64>)> {
             match d.score.name.strip_prefix(HELD) {
                 Some(key) => {

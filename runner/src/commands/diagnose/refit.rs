@@ -9,15 +9,17 @@
 //! `DIR/refit/free/`, or `DIR/fit/` with `--fit-first`), and then each contender with them:
 //! a candidate, or a `--probe`d parameter, that the linear diagnosis found significant, kept
 //! in its verdict, or scored at a corrected p under [`CONTENDER_P`] (an effect with a
-//! positive strength). Each contender gets two tests:
+//! positive strength). Each contender gets three tests:
 //! - needed: the drop of chi^2 from the null fit, D = chi^2_free - chi^2_C, against
 //!   chi^2(1) (conservative at a strength bounded at 0), Holm-corrected over the contenders;
-//! - within the noise: P(chi^2_dof > chi^2_C) >= alpha, the verdict's misfit test.
+//! - within the noise: P(chi^2_dof > chi^2_C) >= alpha, the verdict's misfit test;
+//! - excluded: its fit is worse than the best needed contender's row by row (Vuong's test,
+//!   Holm-corrected over the others).
 //!
-//! The verdict: the one contender needed and within the noise is named with its fitted
-//! strength; several are `ambiguous`; none but one needed is `none_of_the_candidates`; none
-//! needed is `no_effect` when the null fit is within the noise, else
-//! `none_of_the_candidates`. Two effects are not fitted together: a truth with two ends
+//! The verdict: the best needed contender, if within the noise, is named with its fitted
+//! strength when every other needed one is excluded, and is `ambiguous` with those that are
+//! not; a best outside the noise is `none_of_the_candidates`; none needed is `no_effect` when
+//! the null fit is within the noise, else `none_of_the_candidates`. Two effects are not fitted together: a truth with two ends
 //! ambiguous, `none_of_the_candidates`, or with the one whose fit alone is within the noise.
 
 use super::{DiagnoseArgs, Diagnosed, HELD};
@@ -28,7 +30,7 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::path::Path;
 use tilth_tools::diagnose::verdict::{Kind, Misfit, Named, Verdict};
 
-/// Corrected p-value under which a candidate is refitted even if not significant: a
+/// Corrected p-value under which a candidate is refitted, significant or not: a
 /// linearisation can understate a strong effect's score, and a contender left out could be
 /// the truth beside a named one.
 pub const CONTENDER_P: f64 = 0.1;
@@ -91,9 +93,7 @@ fn contenders<'a>(verdict: &Verdict, diagnosed: &'a [Diagnosed], alpha: f64) -> 
         .iter()
         // A held parameter may be off either way; an effect's strength is not negative.
         .filter(|d| d.score.identifiable && (d.score.strength > 0.0 || d.held_parameter))
-        .filter(|d| {
-            d.significant || kept(&d.score.name) || d.score.p_value < CONTENDER_P.max(alpha)
-        })
+        .filter(|d| kept(&d.score.name) || d.score.p_value < CONTENDER_P.max(alpha))
         .collect();
     out.sort_by(|a, b| b.score.statistic.total_cmp(&a.score.statistic));
     out

@@ -4,12 +4,14 @@
 //! ([`tilth_tools::diagnose::discriminate::fitted_separations`]). Nothing is linearised: a
 //! rival several steps strong predicts what it predicts.
 
-use super::{Measured, NextArgs, Suggestion, group};
+use super::{NextArgs, Suggestion, group};
 use crate::commands::compare::{Simulate, mean_sd, prefetch, simulate};
 use crate::commands::diagnose::file::DiagnosisFile;
 use crate::commands::measurements::Measurement;
+use crate::commands::synth::Noise;
 use crate::sweep::execute;
 use anyhow::Result;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use tilth_tools::diagnose::discriminate::{Fitted, fitted_separations};
 
@@ -43,7 +45,7 @@ pub(super) fn fitted_options(
     rivals: &[String],
     models: &[(PathBuf, f64)],
     menu: &[Measurement],
-    measured: &Measured,
+    noise: &BTreeMap<String, Noise>,
 ) -> Result<Vec<Suggestion>> {
     let set = args.lab.set.parse()?;
     let r = d.replicates;
@@ -105,11 +107,10 @@ pub(super) fn fitted_options(
                     .sum::<f64>()
                     / values.len() as f64;
                 let mean = mean_sd(&values[0][i]).0;
-                let lab = measured
-                    .noise
+                let lab = noise
                     .get(&menu[i].observable)
                     .map_or(scatter, |n| n.sd(mean));
-                lab * lab / measured.specimens as f64
+                lab * lab / args.specimens as f64
             })
             .collect();
         if kept.is_empty() {

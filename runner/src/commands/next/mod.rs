@@ -97,15 +97,7 @@ pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
     let noise = parse_noise(&args.noise)?;
     let (strengths, baseline, mut options, mode) = match fitted::fitted_rivals(&d, &rivals) {
         Some(models) => {
-            let measured = Measured {
-                values: &[],
-                variants: &[],
-                replicates: d.replicates,
-                params: d.free_parameters.len(),
-                noise: &noise,
-                specimens: args.specimens,
-            };
-            let options = fitted::fitted_options(args, &d, &rivals, &models, &menu, &measured)?;
+            let options = fitted::fitted_options(args, &d, &rivals, &models, &menu, &noise)?;
             let strengths = models.iter().map(|m| m.1).collect();
             (strengths, vec![], options, "fitted")
         }
