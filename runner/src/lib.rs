@@ -16,13 +16,13 @@ pub mod config;
 pub mod lab;
 pub mod memory;
 pub mod progress;
+pub mod provenance;
 pub mod record;
 pub mod sweep;
 
 use tilth_kernel::KernelError;
 
-/// The git commit this binary was built from (`-dirty` with uncommitted changes).
-pub const GIT_COMMIT: &str = env!("TILTH_GIT_COMMIT");
+pub use provenance::GIT_COMMIT;
 
 /// Exit code for success.
 pub const EXIT_OK: u8 = 0;
@@ -36,7 +36,7 @@ pub const EXIT_BAD_INPUT: u8 = 2;
 /// The exit code for an error: [`EXIT_RUN_FAILED`] when the kernel stopped a run,
 /// [`EXIT_BAD_INPUT`] otherwise.
 pub fn exit_code(err: &anyhow::Error) -> u8 {
-    use commands::sweep::SweepEnd;
+    use sweep::execute::SweepEnd;
     match err.downcast_ref::<SweepEnd>() {
         Some(SweepEnd::Interrupted) => return EXIT_INTERRUPTED,
         Some(SweepEnd::Failed(_)) => return EXIT_RUN_FAILED,

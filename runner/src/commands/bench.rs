@@ -250,8 +250,8 @@ fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
     writeln!(out, "wall seconds: {secs:.3}")?;
     // As LIGGGHTS's "Pair / Neigh / Other time (%)" after its loop.
     writeln!(out, "time per part of the stepping loop:")?;
-    let parts = super::report::time_breakdown(&(sim.times - times_before), secs);
-    super::report::write_time_breakdown(out, &parts, "  ")?;
+    let parts = crate::sweep::report::time_breakdown(&(sim.times - times_before), secs);
+    crate::sweep::report::write_time_breakdown(out, &parts, "  ")?;
     writeln!(out, "neighbour rebuilds: {}", sim.rebuilds)?;
     let (touching, _) = sim.contact_counts();
     writeln!(

@@ -301,7 +301,7 @@ pub fn posterior_intervals(params: &[Param], post: &Posterior) -> String {
 }
 
 fn chrono_free_note() -> String {
-    format!("tilth {}", crate::GIT_COMMIT)
+    format!("tilth {}", crate::provenance::GIT_COMMIT)
 }
 
 pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]) -> String {

@@ -25,6 +25,7 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use tilth_tools::compare as compare_stats;
 use tilth_tools::compare::plot as compare_plot;
+pub use tilth_tools::compare::{mean_sd, std_error};
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
@@ -554,7 +555,7 @@ pub fn run_generated(
     };
     let outcome = execute::execute(plan, &opts, stop.clone())?;
     if outcome.interrupted {
-        return Err(super::sweep::SweepEnd::Interrupted.into());
+        return Err(crate::sweep::execute::SweepEnd::Interrupted.into());
     }
     Ok(())
 }
@@ -580,23 +581,6 @@ pub fn factor(name: &str, target: &str) -> Factor {
         low: f64::NAN,
         high: f64::NAN,
     }
-}
-
-/// Mean and sample standard deviation (`None` below two values) of `v`.
-pub fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let sd =
-        (v.len() > 1).then(|| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt());
-    (m, sd)
-}
-
-/// Standard error of (simulated mean - measured): sqrt(scatter^2 / replicates +
-/// uncertainty^2), when either is known.
-pub fn std_error(scatter: Option<f64>, replicates: usize, uncertainty: Option<f64>) -> Option<f64> {
-    let var = scatter.map_or(0.0, |s| s * s / replicates.max(1) as f64)
-        + uncertainty.map_or(0.0, |u| u * u);
-    (var > 0.0).then(|| var.sqrt())
 }
 
 fn summarize(m: Measurement, sims: Vec<f64>, problems: Vec<String>) -> Compared {

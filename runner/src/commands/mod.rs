@@ -15,7 +15,6 @@ pub mod next;
 pub mod project_report;
 pub mod project_story;
 pub mod reduce;
-pub mod report;
 pub mod rsm;
 pub mod rsm_plot;
 pub mod rsm_print;

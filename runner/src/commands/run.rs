@@ -1,8 +1,8 @@
 //! `tilth run [FILE]`: load a scene, step it with a progress bar, print a summary.
 
-use super::report::{RunCost, RunReport, Sample};
 use crate::config;
 use crate::progress::Progress;
+use crate::sweep::report::{RunCost, RunReport, Sample};
 use anyhow::{Context, Result};
 use clap::Args;
 use std::io::Write;
@@ -175,7 +175,7 @@ fn run_experiment(args: &RunArgs, file: &std::path::Path, out: &mut dyn Write) -
     }
     match row.status {
         Status::Done => Ok(()),
-        Status::Interrupted => Err(super::sweep::SweepEnd::Interrupted.into()),
+        Status::Interrupted => Err(crate::sweep::execute::SweepEnd::Interrupted.into()),
         _ => Err(anyhow::anyhow!(
             "{}: {}",
             plan.origin,

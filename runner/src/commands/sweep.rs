@@ -1,7 +1,7 @@
 //! `tilth sweep plan|run|status|slurm` (and `worker`, the array task of a lab command's
 //! `--slurm`).
 
-use crate::sweep::execute::{self, Options};
+use crate::sweep::execute::{self, Options, SweepEnd};
 use crate::sweep::job::Status;
 use crate::sweep::manifest::Manifest;
 use crate::sweep::{Plan, slurm, slurm_wait};
@@ -131,30 +131,6 @@ pub fn slurm_shard() -> Result<Option<(usize, usize)>> {
     }
 }
 
-/// A sweep that ended with failed or interrupted runs (exit codes 1 and 130).
-#[derive(Debug)]
-pub enum SweepEnd {
-    Failed(usize),
-    Interrupted,
-}
-
-impl std::fmt::Display for SweepEnd {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SweepEnd::Failed(n) => write!(
-                f,
-                "{n} run(s) failed; their errors are in the manifest and in runs/NNN/summary.json"
-            ),
-            SweepEnd::Interrupted => write!(
-                f,
-                "interrupted: running runs stopped after closing their MCAP chunks; run the same command again to finish the sweep"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for SweepEnd {}
-
 fn default_out(plan: &Plan) -> PathBuf {
     Path::new("runs").join(&plan.name)
 }
@@ -179,7 +155,12 @@ pub fn sweep(cmd: &SweepCommand, out: &mut dyn Write) -> Result<()> {
         SweepCommand::Slurm(args) => {
             let plan = Plan::load(Some(&args.file))?;
             let dir = args.out.clone().unwrap_or_else(|| default_out(&plan));
-            let script = slurm::script(&plan, &args.file, &dir, args)?;
+            let options = slurm::ArrayOptions {
+                tasks: args.tasks,
+                partition: args.partition.clone(),
+                time: args.time.clone(),
+            };
+            let script = slurm::script(&plan, &args.file, &dir, &options)?;
             // sbatch needs the log directory to exist before the tasks start.
             let logs = dir.join("slurm");
             std::fs::create_dir_all(&logs)

@@ -12,6 +12,7 @@ mod materials;
 mod output;
 mod particles;
 mod simulation;
+pub mod target;
 mod walls;
 
 pub use contact::{ContactSection, PairSection};
@@ -20,7 +21,7 @@ pub use materials::MaterialSection;
 pub use output::OutputSection;
 pub use particles::ParticleSection;
 pub use simulation::{DomainSection, SimulationSection};
-pub use walls::{MotionSection, ShapeSection, WallSection};
+pub use walls::{MotionSection, ShapeSection, WallSection, WallShape};
 
 use anyhow::{Context, Result, bail};
 use serde::Deserialize;
@@ -204,7 +205,7 @@ pub struct Prepared {
     pub sample_every: Option<u64>,
     pub info: SceneInfo,
     /// How each wall is drawn in recordings.
-    pub wall_shapes: Vec<crate::record::WallShape>,
+    pub wall_shapes: Vec<WallShape>,
 }
 
 impl Prepared {

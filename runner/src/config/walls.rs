@@ -6,7 +6,6 @@
 //! `mesh` {file, scale} (an STL file, relative to the scene file's directory). Lengths in m.
 
 use super::check;
-use crate::record::WallShape;
 use anyhow::{Result, anyhow, bail};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -387,4 +386,25 @@ mod tests {
                 .to_string();
         assert!(err.contains("missing field `material`"), "{err}");
     }
+}
+
+/// How a wall is drawn (its initial pose; the recorded offset moves it).
+#[derive(Debug, Clone)]
+pub enum WallShape {
+    /// Drawn as a thin square of `half_width` around `point`.
+    Plane {
+        point: [f64; 3],
+        normal: [f64; 3],
+        half_width: f64,
+    },
+    /// A cylinder, cone frustum or disc (length 0) along `axis` from `base`.
+    Axisymmetric {
+        base: [f64; 3],
+        axis: [f64; 3],
+        radius_base: f64,
+        radius_top: f64,
+        length: f64,
+    },
+    /// Triangles (m), drawn as a triangle list.
+    Mesh { triangles: Vec<[[f64; 3]; 3]> },
 }

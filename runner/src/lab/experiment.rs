@@ -22,7 +22,7 @@ use super::model::{At, Conditions, Model};
 use super::protocol::Protocol;
 use super::{repose, shear, ucs};
 use crate::config;
-use crate::sweep::target;
+use crate::config::target;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::Deserialize;
 use std::path::Path;

@@ -6,6 +6,7 @@
 pub mod discharge;
 pub mod experiment;
 pub mod model;
+pub mod observe;
 pub mod protocol;
 pub mod repose;
 pub mod shear;

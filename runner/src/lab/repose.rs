@@ -12,9 +12,9 @@
 
 use super::discharge::Discharge;
 use super::experiment::{Built, Common, rayleigh_time, scene::*, soil_density};
+use super::observe::{self, Tray};
 use super::protocol::{Control, Protocol};
 use super::sizes::SizeMix;
-use crate::sweep::observe::{self, Tray};
 use anyhow::{Result, bail};
 use serde::Deserialize;
 use std::collections::BTreeMap;

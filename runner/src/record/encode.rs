@@ -2,7 +2,8 @@
 //!
 //! Everything is in the frame `world` (z up, metres). Timestamps are simulated time.
 
-use super::snapshot::{BOND_STRIDE, POINT_STRIDE, WallShape};
+use super::snapshot::{BOND_STRIDE, POINT_STRIDE};
+use crate::config::WallShape;
 use foxglove::bytes::Bytes;
 use foxglove::messages::{
     Color, CubePrimitive, CylinderPrimitive, LinePrimitive, PackedElementField, Point3, PointCloud,

@@ -10,6 +10,7 @@ pub mod rates;
 pub mod snapshot;
 pub mod writer;
 
+pub use crate::config::WallShape;
 pub use rates::{FrameRates, RecordSection};
-pub use snapshot::{Record, WallShape};
+pub use snapshot::Record;
 pub use writer::{Recorder, RecorderStats};

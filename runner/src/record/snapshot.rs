@@ -36,27 +36,6 @@ pub enum Record {
 /// -1 while intact).
 pub const BOND_STRIDE: usize = 60;
 
-/// How a wall is drawn (its initial pose; the recorded offset moves it).
-#[derive(Debug, Clone)]
-pub enum WallShape {
-    /// Drawn as a thin square of `half_width` around `point`.
-    Plane {
-        point: [f64; 3],
-        normal: [f64; 3],
-        half_width: f64,
-    },
-    /// A cylinder, cone frustum or disc (length 0) along `axis` from `base`.
-    Axisymmetric {
-        base: [f64; 3],
-        axis: [f64; 3],
-        radius_base: f64,
-        radius_top: f64,
-        length: f64,
-    },
-    /// Triangles (m), drawn as a triangle list.
-    Mesh { triangles: Vec<[[f64; 3]; 3]> },
-}
-
 /// Packs every particle of `sim` into a [`Record::Particles`].
 pub fn particles(sim: &Simulation) -> Record {
     let p = &sim.particles;

@@ -7,7 +7,8 @@
 //! The caller pins the writer to its run's core through `on_start`.
 
 use super::encode;
-use super::snapshot::{Record, WallShape};
+use super::snapshot::Record;
+use crate::config::WallShape;
 use anyhow::{Context, Result, anyhow};
 use crossbeam::channel::{Sender, bounded};
 use foxglove::Encode;

@@ -435,7 +435,7 @@ pub fn scatter_lines(plan: &Plan, table: &[Vec<String>]) -> Vec<String> {
             .filter(|r| status.is_some_and(|s| r[s] == Status::Done.as_str()))
             .filter_map(|r| r[col].parse::<f64>().ok())
             .collect();
-        let (mean, Some(sd)) = crate::commands::compare::mean_sd(&values) else {
+        let (mean, Some(sd)) = tilth_tools::compare::mean_sd(&values) else {
             continue;
         };
         let se = sd / (values.len() as f64).sqrt();
@@ -496,3 +496,27 @@ mod tests {
         assert_eq!(budget(Some(n)).unwrap().pin, all.pin);
     }
 }
+
+/// A sweep that ended with failed or interrupted runs (exit codes 1 and 130).
+#[derive(Debug)]
+pub enum SweepEnd {
+    Failed(usize),
+    Interrupted,
+}
+
+impl std::fmt::Display for SweepEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SweepEnd::Failed(n) => write!(
+                f,
+                "{n} run(s) failed; their errors are in the manifest and in runs/NNN/summary.json"
+            ),
+            SweepEnd::Interrupted => write!(
+                f,
+                "interrupted: running runs stopped after closing their MCAP chunks; run the same command again to finish the sweep"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for SweepEnd {}

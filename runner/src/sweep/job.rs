@@ -4,9 +4,9 @@
 //! it completes, then `summary.json` (written last, atomically: its presence with status
 //! `done` is what marks the run complete for a resumed sweep).
 
-use super::observe::{self, Heap};
 use super::plan::{Plan, PlannedRun, innermost};
-use crate::commands::report::{RunCost, RunReport};
+use super::report::{RunCost, RunReport};
+use crate::lab::observe::{self, Heap};
 use crate::lab::protocol::{Control, Protocol};
 use crate::record::writer::RunLayout;
 use crate::record::{Recorder, RecorderStats, snapshot};
@@ -345,7 +345,7 @@ fn metadata(plan: &Plan, run: &PlannedRun) -> BTreeMap<String, BTreeMap<String, 
     r.insert("seed".into(), run.seed.to_string());
     r.insert("fingerprint".into(), plan.fingerprint.clone());
     r.insert("tilth_version".into(), env!("CARGO_PKG_VERSION").into());
-    r.insert("git_commit".into(), crate::GIT_COMMIT.into());
+    r.insert("git_commit".into(), crate::provenance::GIT_COMMIT.into());
     for (k, v) in &run.values {
         r.insert(format!("factor.{k}"), v.to_string());
     }

@@ -7,10 +7,9 @@ pub mod execute;
 pub mod file;
 pub mod job;
 pub mod manifest;
-pub mod observe;
 pub mod plan;
+pub mod report;
 pub mod slurm;
 pub mod slurm_wait;
-pub mod target;
 
 pub use plan::{Plan, PlannedRun};

@@ -2,8 +2,8 @@
 
 use super::design::{self, Expanded};
 use super::file::{self, FactorSection, Source, SweepFile};
-use super::target;
 use crate::config;
+use crate::config::target;
 use crate::lab::experiment;
 use crate::lab::protocol::{Protocol, RunSteps};
 use crate::record::RecordSection;

@@ -6,7 +6,6 @@
 //! closes its MCAP chunks and exits, and resubmitting the same script resumes the sweep.
 
 use super::plan::Plan;
-use crate::commands::sweep::SlurmArgs;
 use anyhow::{Context, Result};
 use std::path::Path;
 
@@ -15,8 +14,19 @@ fn absolute(p: &Path) -> Result<std::path::PathBuf> {
     std::path::absolute(p).with_context(|| format!("{}: cannot make absolute", p.display()))
 }
 
+/// What the job array asks of Slurm.
+#[derive(Debug, Clone)]
+pub struct ArrayOptions {
+    /// Array tasks (default: one per run, at most 100).
+    pub tasks: Option<usize>,
+    /// Slurm partition (default: the cluster's default).
+    pub partition: Option<String>,
+    /// Time limit per task, Slurm syntax (e.g. 2:00:00).
+    pub time: String,
+}
+
 /// The script for `plan` read from `file`, writing into `out`.
-pub fn script(plan: &Plan, file: &Path, out: &Path, args: &SlurmArgs) -> Result<String> {
+pub fn script(plan: &Plan, file: &Path, out: &Path, args: &ArrayOptions) -> Result<String> {
     let tasks = args
         .tasks
         .unwrap_or(plan.runs.len().min(100))

@@ -288,7 +288,7 @@ pub fn work(dirs: &[PathBuf], cores: Option<usize>, shard: Option<(usize, usize)
         };
         let outcome = execute::execute(&plan, &opts, stop.clone())?;
         if outcome.interrupted {
-            return Err(crate::commands::sweep::SweepEnd::Interrupted.into());
+            return Err(super::execute::SweepEnd::Interrupted.into());
         }
     }
     Ok(())

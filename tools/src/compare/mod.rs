@@ -22,6 +22,23 @@ use serde::Serialize;
 use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};
 use std::collections::BTreeMap;
 
+/// Mean and sample standard deviation (`None` below two values) of `v`.
+pub fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let sd =
+        (v.len() > 1).then(|| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt());
+    (m, sd)
+}
+
+/// Standard error of (simulated mean - measured): sqrt(scatter^2 / replicates +
+/// uncertainty^2), when either is known.
+pub fn std_error(scatter: Option<f64>, replicates: usize, uncertainty: Option<f64>) -> Option<f64> {
+    let var = scatter.map_or(0.0, |s| s * s / replicates.max(1) as f64)
+        + uncertainty.map_or(0.0, |u| u * u);
+    (var > 0.0).then(|| var.sqrt())
+}
+
 /// One compared row, as the analysis needs it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {

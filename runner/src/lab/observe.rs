@@ -5,7 +5,7 @@
 //! radius. It is the cone-fit cross-check EDEM users make by eye, not the study's
 //! boundary-fit method (that comes with the repose reducer).
 
-use crate::record::WallShape;
+use crate::config::WallShape;
 use serde::Serialize;
 use tilth_kernel::sim::Simulation;
 
