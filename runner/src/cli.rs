@@ -1,9 +1,7 @@
 //! The command-line surface.
 
-use crate::commands::{
-    bench, calibrate, check, compare, diagnose, fit, laws, next, project_report, reduce, rsm, run,
-    sweep, synth,
-};
+use crate::commands::{bench, laws, reduce, run, sweep};
+use crate::study::{calibrate, check, compare, diagnose, fit, next, project_report, rsm, synth};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;

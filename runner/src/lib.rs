@@ -18,6 +18,7 @@ pub mod memory;
 pub mod progress;
 pub mod provenance;
 pub mod record;
+pub mod study;
 pub mod sweep;
 
 use tilth_kernel::KernelError;

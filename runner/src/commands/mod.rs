@@ -1,23 +1,7 @@
 //! The subcommands.
 
 pub mod bench;
-pub mod calibrate;
-pub mod calibrate_joint;
-pub mod calibrate_report;
-pub mod check;
-pub mod compare;
-pub mod diagnose;
-pub mod fit;
 pub mod laws;
-pub mod measurements;
-pub mod model_edit;
-pub mod next;
-pub mod project_report;
-pub mod project_story;
 pub mod reduce;
-pub mod rsm;
-pub mod rsm_plot;
-pub mod rsm_print;
 pub mod run;
 pub mod sweep;
-pub mod synth;

@@ -1,6 +1,6 @@
 //! `diagnosis.json` as `tilth fit --from-diagnosis` and `tilth next` read it back.
 
-use crate::commands::calibrate::Param;
+use crate::study::calibrate::Param;
 use anyhow::{Context, Result};
 use serde::Deserialize;
 use std::collections::BTreeMap;

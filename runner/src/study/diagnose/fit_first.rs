@@ -2,7 +2,7 @@
 //! test), and what it moved.
 
 use super::DiagnoseArgs;
-use crate::commands::measurements::Measurement;
+use crate::study::measurements::Measurement;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -22,7 +22,7 @@ pub(super) fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Opt
             dir.display()
         );
     }
-    let fit = crate::commands::fit::FitArgs {
+    let fit = crate::study::fit::FitArgs {
         model: args.model.clone(),
         data,
         params: args.params.clone(),
@@ -33,7 +33,7 @@ pub(super) fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Opt
         out: dir.clone(),
         lab: args.lab.clone(),
     };
-    crate::commands::fit::fit(&fit, &mut std::io::sink())?;
+    crate::study::fit::fit(&fit, &mut std::io::sink())?;
     Ok(Some(std::path::absolute(dir.join("model.toml"))?))
 }
 
@@ -48,7 +48,7 @@ pub(super) fn data_for(
         return Ok(args.data.clone());
     }
     let only = dir.join("data.csv");
-    crate::commands::measurements::write_measurements(&only, rows)?;
+    crate::study::measurements::write_measurements(&only, rows)?;
     Ok(only)
 }
 

@@ -14,7 +14,7 @@ pub fn params_from_diagnosis(
     dir: &Path,
     steps: &dyn Fn(&str) -> Option<f64>,
 ) -> Result<Vec<String>> {
-    let (d, path) = crate::commands::diagnose::file::read(dir, "--from-diagnosis")?;
+    let (d, path) = crate::study::diagnose::file::read(dir, "--from-diagnosis")?;
     let v = &d.verdict;
     match v.verdict {
         Kind::Effect => {}

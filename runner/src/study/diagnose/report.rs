@@ -4,7 +4,7 @@ use super::HELD;
 use super::fit_first::FitFirst;
 use super::refit::Refits;
 use super::{DiagnoseArgs, Diagnosed, Recalibrated};
-use crate::commands::calibrate::Param;
+use crate::study::calibrate::Param;
 use std::collections::BTreeMap;
 use tilth_tools::compare::p_text;
 use tilth_tools::diagnose::Unidentified;

@@ -65,7 +65,7 @@ pub struct NextArgs {
     pub lab: LabRunArgs,
 }
 
-use crate::commands::diagnose::file::DiagnosisFile as Diagnosis;
+use crate::study::diagnose::file::DiagnosisFile as Diagnosis;
 
 /// One measurement the lab could take, scored.
 #[derive(Debug, Serialize)]
@@ -230,7 +230,7 @@ fn linear_options(
 
 /// The diagnosis in `path`, checked against the options, and the rivals to separate.
 fn load(args: &NextArgs) -> Result<(Diagnosis, Vec<String>, PathBuf)> {
-    let (d, path) = crate::commands::diagnose::file::read(&args.diagnosis, "--diagnosis")?;
+    let (d, path) = crate::study::diagnose::file::read(&args.diagnosis, "--diagnosis")?;
     let path = &path;
     if d.coarse != args.lab.coarse {
         bail!(

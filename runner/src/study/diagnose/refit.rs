@@ -23,7 +23,7 @@
 //! ambiguous, `none_of_the_candidates`, or with the one whose fit alone is within the noise.
 
 use super::{DiagnoseArgs, Diagnosed, HELD};
-use crate::commands::measurements::Measurement;
+use crate::study::measurements::Measurement;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -166,7 +166,7 @@ fn fit_into(
     std::fs::create_dir_all(dir)?;
     let mut params = args.params.clone();
     params.extend(extra.map(String::from));
-    let fit = crate::commands::fit::FitArgs {
+    let fit = crate::study::fit::FitArgs {
         model: model.to_path_buf(),
         data: data.to_path_buf(),
         params,
@@ -177,7 +177,7 @@ fn fit_into(
         out: dir.to_path_buf(),
         lab: args.lab.clone(),
     };
-    crate::commands::fit::fit(&fit, &mut std::io::sink())?;
+    crate::study::fit::fit(&fit, &mut std::io::sink())?;
     read_fit(dir)
 }
 

@@ -5,10 +5,10 @@
 //! rival several steps strong predicts what it predicts.
 
 use super::{NextArgs, Suggestion, group};
-use crate::commands::compare::{Simulate, mean_sd, prefetch, simulate};
-use crate::commands::diagnose::file::DiagnosisFile;
-use crate::commands::measurements::Measurement;
-use crate::commands::synth::Noise;
+use crate::study::compare::{Simulate, mean_sd, prefetch, simulate};
+use crate::study::diagnose::file::DiagnosisFile;
+use crate::study::measurements::Measurement;
+use crate::study::synth::Noise;
 use crate::sweep::execute;
 use anyhow::Result;
 use std::collections::BTreeMap;
