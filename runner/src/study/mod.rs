@@ -11,6 +11,7 @@ pub mod check;
 pub mod compare;
 pub mod diagnose;
 pub mod fit;
+pub mod lab_runs;
 pub mod measurements;
 pub mod model_edit;
 pub mod next;

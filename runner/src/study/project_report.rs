@@ -60,10 +60,35 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
             args.project.display()
         );
     }
+    let observables = observables_of(&runs);
 
-    // Observables over all runs, with their unit.
+    let mut html = page_head(&args.project, runs.len());
+    html += &runs_table(&runs);
+    html += &story_html(&steps, escape);
+    html += &error_table(&runs, &observables);
+    html += &rmse_charts(&runs, &observables)?;
+    html += &failure_summaries(&runs);
+    html += &plots_side_by_side(&runs);
+    html += "</body></html>\n";
+
+    let path = args
+        .out
+        .clone()
+        .unwrap_or_else(|| args.project.join("report.html"));
+    std::fs::write(&path, html).with_context(|| format!("{}: cannot write", path.display()))?;
+    writeln!(
+        out,
+        "{} compare runs -> {} (open it in a browser; it needs no network)",
+        runs.len(),
+        path.display()
+    )?;
+    Ok(())
+}
+
+/// Observables over all runs, with their unit ("" when no run names one).
+fn observables_of(runs: &[&Step]) -> BTreeMap<String, String> {
     let mut observables: BTreeMap<String, String> = BTreeMap::new();
-    for r in &runs {
+    for r in runs {
         for v in r.json["verdicts"].as_array().into_iter().flatten() {
             if let Some(o) = v["observable"].as_str() {
                 observables.insert(o.into(), v["unit"].as_str().unwrap_or("").into());
@@ -73,9 +98,21 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
             observables.entry(o.clone()).or_default();
         }
     }
-    let rmse = |r: &Step, o: &str| r.json["observables"][o]["rmse"].as_f64();
-    let mre = |r: &Step, o: &str| r.json["observables"][o]["mean_relative_error"].as_f64();
+    observables
+}
 
+/// A run's RMSE of observable `o`, in its unit.
+fn rmse(r: &Step, o: &str) -> Option<f64> {
+    r.json["observables"][o]["rmse"].as_f64()
+}
+
+/// A run's mean relative error of observable `o`.
+fn mre(r: &Step, o: &str) -> Option<f64> {
+    r.json["observables"][o]["mean_relative_error"].as_f64()
+}
+
+/// The document head, its style sheet and the page's title.
+fn page_head(project: &std::path::Path, runs: usize) -> String {
     let mut html = String::from(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tilth report</title>\n<style>\
          body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}\
@@ -86,11 +123,16 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
     );
     html += &format!(
         "<h1>tilth report: {}</h1>\n<p>{} compare run{}, oldest first. Errors are simulated minus measured.</p>\n",
-        escape(&args.project.display().to_string()),
-        runs.len(),
-        if runs.len() == 1 { "" } else { "s" }
+        escape(&project.display().to_string()),
+        runs,
+        if runs == 1 { "" } else { "s" }
     );
+    html
+}
 
+/// The compare runs: model, data and replicates, one row each.
+fn runs_table(runs: &[&Step]) -> String {
+    let mut html = String::new();
     // The runs, then the errors with one column per run: a project's history grows in runs,
     // and a row per observable keeps the page as wide as the number of runs (with the paths
     // in their own table, four observables no longer push it off the screen sideways).
@@ -106,8 +148,13 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     html += "</table>\n";
-    html += &story_html(&steps, escape);
+    html
+}
 
+/// The errors with one column per run (RMSE and mean relative error), coloured by the
+/// change from the run before.
+fn error_table(runs: &[&Step], observables: &BTreeMap<String, String>) -> String {
+    let mut html = String::new();
     html += "<h2>Error per observable</h2>\n<p>RMSE in the observable's unit, and below it the mean relative error; \
              green where a run's RMSE fell from the run before it, red where it rose.</p>\n\
              <table><tr><th class=\"l\">observable</th>";
@@ -115,7 +162,7 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         html += &format!("<th>{}. {}</th>", k + 1, escape(&r.label));
     }
     html += "</tr>\n";
-    for (o, u) in &observables {
+    for (o, u) in observables {
         html += &format!(
             "<tr><td class=\"l\">{}{}</td>",
             escape(o),
@@ -143,10 +190,16 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
     }
     html += "</table>\n";
 
+    html
+}
+
+/// One RMSE-history chart per observable.
+fn rmse_charts(runs: &[&Step], observables: &BTreeMap<String, String>) -> Result<String> {
+    let mut html = String::new();
     // The charts wrap onto the next line (the plots further down scroll instead, to keep the
     // runs of one plot side by side).
     html += "<h2>RMSE history</h2>\n<div class=\"row wrap\">\n";
-    for (o, u) in &observables {
+    for (o, u) in observables {
         let values: Vec<f64> = runs
             .iter()
             .map(|r| rmse(r, o).unwrap_or(f64::NAN))
@@ -159,6 +212,12 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
     }
     html += "</div>\n";
 
+    Ok(html)
+}
+
+/// Each run's summary in words.
+fn failure_summaries(runs: &[&Step]) -> String {
+    let mut html = String::new();
     html += "<h2>Where each model fails</h2>\n";
     for (k, r) in runs.iter().enumerate() {
         html += &format!("<h3>{}. {}</h3>\n", k + 1, escape(&r.label));
@@ -175,9 +234,15 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
         }
     }
 
+    html
+}
+
+/// Every plot the runs made, by name, the runs side by side.
+fn plots_side_by_side(runs: &[&Step]) -> String {
+    let mut html = String::new();
     // Plots by name, the runs side by side.
     let mut names: Vec<String> = vec![];
-    for r in &runs {
+    for r in runs {
         for p in r.json["plots"].as_array().into_iter().flatten() {
             if let Some(p) = p.as_str() {
                 if !names.iter().any(|n| n == p) {
@@ -228,18 +293,5 @@ pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
             missing.join(", ")
         );
     }
-    html += "</body></html>\n";
-
-    let path = args
-        .out
-        .clone()
-        .unwrap_or_else(|| args.project.join("report.html"));
-    std::fs::write(&path, html).with_context(|| format!("{}: cannot write", path.display()))?;
-    writeln!(
-        out,
-        "{} compare runs -> {} (open it in a browser; it needs no network)",
-        runs.len(),
-        path.display()
-    )?;
-    Ok(())
+    html
 }
