@@ -28,7 +28,6 @@ LAYERS = {
         {"lab"},
         {"record", "sweep"},
         {"study"},
-        {"commands"},
         {"cli"},
     ],
 }

@@ -1,7 +1,9 @@
 //! tilth: the command-line front end of the tilth DEM workbench.
 //!
-//! [`config`] turns a TOML scene file into a checked kernel simulation; [`commands`] holds
-//! `run`, `laws` and `bench`; [`cli`] is the argument surface the thin `main.rs` parses.
+//! Layers, lowest first (ARCHITECTURE.md): [`config`] turns a TOML scene file into a checked
+//! kernel simulation; [`lab`] holds the virtual instruments; [`sweep`] expands plans into
+//! runs and executes them, [`record`] writes their MCAP files; [`study`] compares, diagnoses,
+//! fits and calibrates; [`cli`] parses the arguments, calls the library and prints.
 //!
 //! Exit codes: 0 success, 1 the run failed (the kernel stopped it: [`KernelError::BlowUp`]),
 //! 2 bad input or usage. A closed stdout (broken pipe) is not an error.
@@ -11,7 +13,6 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod cli;
-pub mod commands;
 pub mod config;
 pub mod lab;
 pub mod memory;

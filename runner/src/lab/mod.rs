@@ -9,6 +9,7 @@ pub mod model;
 pub mod observe;
 pub mod protocol;
 pub mod repose;
+pub mod settling_bed;
 pub mod shear;
 pub mod sizes;
 pub mod specimen;

@@ -195,3 +195,30 @@ pub fn merge(out: &Path, manifests: Vec<Manifest>) -> Result<Manifest> {
         rows: rows.into_values().collect(),
     })
 }
+
+/// Every `manifest*.json` in the sweep directory `dir` (one per shard) merged into one.
+pub fn read_all(dir: &Path) -> Result<Manifest> {
+    let mut manifests = vec![];
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot read", dir.display()))?;
+    for e in entries {
+        let p = e?.path();
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if name.starts_with("manifest") && name.ends_with(".json") {
+            let text = std::fs::read_to_string(&p)?;
+            let m: Manifest = serde_json::from_str(&text)
+                .with_context(|| format!("{}: not a tilth manifest", p.display()))?;
+            manifests.push(m);
+        }
+    }
+    if manifests.is_empty() {
+        bail!(
+            "{}: no manifest*.json; is it a sweep's output directory?",
+            dir.display()
+        );
+    }
+    merge(dir, manifests)
+}

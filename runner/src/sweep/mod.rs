@@ -9,6 +9,7 @@ pub mod job;
 pub mod manifest;
 pub mod plan;
 pub mod report;
+pub mod single;
 pub mod slurm;
 pub mod slurm_wait;
 

@@ -3,9 +3,8 @@
 
 use crate::sweep::execute::{self, Options, SweepEnd};
 use crate::sweep::job::Status;
-use crate::sweep::manifest::Manifest;
 use crate::sweep::{Plan, slurm, slurm_wait};
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow};
 use clap::{Args, Subcommand};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -242,30 +241,7 @@ fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
 }
 
 fn status(args: &StatusArgs, out: &mut dyn Write) -> Result<()> {
-    let dir = &args.dir;
-    let mut manifests = vec![];
-    let entries =
-        std::fs::read_dir(dir).with_context(|| format!("{}: cannot read", dir.display()))?;
-    for e in entries {
-        let p = e?.path();
-        let name = p
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        if name.starts_with("manifest") && name.ends_with(".json") {
-            let text = std::fs::read_to_string(&p)?;
-            let m: Manifest = serde_json::from_str(&text)
-                .with_context(|| format!("{}: not a tilth manifest", p.display()))?;
-            manifests.push(m);
-        }
-    }
-    if manifests.is_empty() {
-        bail!(
-            "{}: no manifest*.json; is it a sweep's output directory?",
-            dir.display()
-        );
-    }
-    let merged = crate::sweep::manifest::merge(dir, manifests)?;
+    let merged = crate::sweep::manifest::read_all(&args.dir)?;
     if args.json {
         serde_json::to_writer_pretty(&mut *out, &merged)?;
         writeln!(out)?;

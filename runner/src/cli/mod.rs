@@ -1,7 +1,13 @@
-//! The command-line surface.
+//! The command-line surface: one file per command that parses its arguments, calls the
+//! library and prints.
 
-use crate::commands::{bench, laws, reduce, run, sweep};
 use crate::study::{calibrate, check, compare, diagnose, fit, next, project_report, rsm, synth};
+mod bench;
+mod laws;
+mod reduce;
+mod run;
+mod sweep;
+
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;

@@ -1,5 +1,5 @@
-//! `tilth bench settling-bed`: the kernel's speed benchmark
-//! (tools/bench/settling-bed/README.md), built in code.
+//! The settling bed: the kernel's speed benchmark scene (`tilth bench settling-bed`,
+//! tools/bench/settling-bed/README.md), built in code, and its timed run.
 //!
 //! A box of four planes (x, y in [-0.03, 0.03] m) on a floor z = 0; N spheres of 2 mm, density
 //! 1380, placed at random without overlap in x, y in [-0.028, 0.028], z in [0.002, 0.118] with
@@ -18,8 +18,6 @@
 
 use crate::progress::Progress;
 use anyhow::{Context, Result, bail};
-use clap::{Args, Subcommand, ValueEnum};
-use std::io::Write;
 use std::time::{Duration, Instant};
 use tilth_kernel::DVec3;
 use tilth_kernel::contact::{ContactModel, ModelSpec, PairSpec};
@@ -27,75 +25,12 @@ use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::material::Material;
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::{Aabb, PairPath, Setup, Simulation};
+use tilth_kernel::timing::PhaseTimes;
 use tilth_kernel::wall::plane::Plane;
 use tilth_kernel::wall::{Motion, Wall};
 
-#[derive(Debug, Subcommand)]
-pub enum Bench {
-    /// Spheres falling into a box and settling into a bed (compare with LIGGGHTS and LAMMPS).
-    SettlingBed(SettlingBedArgs),
-}
-
-#[derive(Debug, Args)]
-pub struct SettlingBedArgs {
-    /// Number of particles.
-    #[arg(long, default_value_t = 20_000)]
-    pub particles: usize,
-    /// Number of time steps (5e-6 s each).
-    #[arg(long, default_value_t = 20_000)]
-    pub steps: u64,
-    /// Worker threads.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
-    pub threads: u64,
-    /// Seed of the random placement.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// No progress bar.
-    #[arg(long)]
-    pub quiet: bool,
-    /// Cohesion law.
-    #[arg(long, value_enum, default_value_t = Cohesion::Jkr)]
-    pub cohesion: Cohesion,
-    /// After the run, time the pair phase alone this many times on the final state, on the
-    /// run's threads (a diagnostic for comparing pair-phase code; BENCHMARKS.md).
-    #[arg(long, default_value_t = 0)]
-    pub pair_phase_reps: usize,
-    /// How the pair phase and the wall contacts evaluate touching contacts (every path
-    /// gives the same bits; for timing one against another).
-    #[arg(long, value_enum, default_value_t = PairPathArg::Lanes)]
-    pub pair_path: PairPathArg,
-}
-
-/// `--pair-path`: the kernel's [`PairPath`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PairPathArg {
-    /// 8 contacts at a time, on the widest vector instructions the CPU has, through the
-    /// model's compiled law set if it has one.
-    Lanes,
-    /// As `lanes`, through the slots' enums even for a compiled law set.
-    Enums,
-    /// 8 at a time, on AVX2 at most.
-    Avx2,
-    /// 8 at a time, on SSE2 (every x86-64 CPU).
-    Baseline,
-    /// One at a time, through the laws' scalar forms.
-    OneByOne,
-}
-
-impl From<PairPathArg> for PairPath {
-    fn from(p: PairPathArg) -> PairPath {
-        match p {
-            PairPathArg::Lanes => PairPath::Lanes,
-            PairPathArg::Enums => PairPath::LanesEnums,
-            PairPathArg::Avx2 => PairPath::LanesAvx2,
-            PairPathArg::Baseline => PairPath::LanesBaseline,
-            PairPathArg::OneByOne => PairPath::OneByOne,
-        }
-    }
-}
-
 /// The settling bed's cohesion.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Cohesion {
     /// Full JKR normal law, surface energy 0.356 J/m^2 (as the LAMMPS deck).
     Jkr,
@@ -104,14 +39,65 @@ pub enum Cohesion {
     Sjkr,
 }
 
-pub fn bench(which: &Bench, out: &mut dyn Write) -> Result<()> {
-    match which {
-        Bench::SettlingBed(args) => settling_bed(args, out),
+/// One settling bed: its size, threads, placement seed and cohesion.
+#[derive(Debug, Clone)]
+pub struct SettlingBed {
+    pub particles: usize,
+    pub threads: u64,
+    pub seed: u64,
+    pub cohesion: Cohesion,
+}
+
+/// A stepped settling bed and where its time went.
+pub struct TimedRun {
+    /// The bed after the last step.
+    pub sim: Simulation,
+    /// Building the scene and placing the particles, s.
+    pub setup_seconds: f64,
+    /// The stepping loop alone, s.
+    pub stepping_seconds: f64,
+    /// The kernel's per-phase times of the stepping loop.
+    pub times: PhaseTimes,
+}
+
+/// Builds the bed and steps it `steps` times on `pair_path`, timing only the stepping.
+pub fn run_timed(
+    bed: &SettlingBed,
+    steps: u64,
+    pair_path: PairPath,
+    show_progress: bool,
+) -> Result<TimedRun> {
+    let t0 = Instant::now();
+    let mut sim = Simulation::new(setup(bed)?)?;
+    sim.set_pair_path(pair_path);
+    let setup_seconds = t0.elapsed().as_secs_f64();
+    let n = sim.particles.len();
+    eprintln!("settling-bed: placed {n} particles in {setup_seconds:.2} s; stepping {steps} steps");
+    for w in &sim.warnings {
+        eprintln!("warning: {w}");
     }
+    let mut progress = Progress::new(steps, show_progress);
+    let mut stepping = Duration::ZERO;
+    let times_before = sim.times;
+    let chunk = 100;
+    while sim.step < steps {
+        let k = chunk.min(steps - sim.step);
+        let t = Instant::now();
+        sim.run(k).context("settling-bed")?;
+        stepping += t.elapsed();
+        progress.update(&sim);
+    }
+    progress.finish();
+    Ok(TimedRun {
+        times: sim.times - times_before,
+        sim,
+        setup_seconds,
+        stepping_seconds: stepping.as_secs_f64(),
+    })
 }
 
 /// The benchmark scene.
-pub fn settling_bed_setup(args: &SettlingBedArgs) -> Result<Setup> {
+pub fn setup(args: &SettlingBed) -> Result<Setup> {
     // The decks give the walls the particles' elastic material; "floor" and "side" only
     // carry their own contact coefficients.
     let soil = Material::new("soil", 13.5e6, 0.2, 1380.0)?;
@@ -215,110 +201,16 @@ pub fn settling_bed_setup(args: &SettlingBedArgs) -> Result<Setup> {
     })
 }
 
-fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
-    let t0 = Instant::now();
-    let mut sim = Simulation::new(settling_bed_setup(args)?)?;
-    sim.set_pair_path(args.pair_path.into());
-    let setup = t0.elapsed().as_secs_f64();
-    let n = sim.particles.len();
-    eprintln!(
-        "settling-bed: placed {n} particles in {setup:.2} s; stepping {} steps",
-        args.steps
-    );
-    for w in &sim.warnings {
-        eprintln!("warning: {w}");
-    }
-    let mut progress = Progress::new(args.steps, !args.quiet);
-    let mut stepping = Duration::ZERO;
-    let times_before = sim.times;
-    let chunk = 100;
-    while sim.step < args.steps {
-        let k = chunk.min(args.steps - sim.step);
-        let t = Instant::now();
-        sim.run(k).context("settling-bed")?;
-        stepping += t.elapsed();
-        progress.update(&sim);
-    }
-    progress.finish();
-    let secs = stepping.as_secs_f64();
-    let n = sim.particles.len();
-    let n_div = n.max(1) as f64;
-    writeln!(out, "particles: {n}")?;
-    writeln!(out, "steps: {}", sim.step)?;
-    writeln!(out, "threads: {}", args.threads)?;
-    writeln!(out, "setup seconds: {setup:.3}")?;
-    writeln!(out, "wall seconds: {secs:.3}")?;
-    // As LIGGGHTS's "Pair / Neigh / Other time (%)" after its loop.
-    writeln!(out, "time per part of the stepping loop:")?;
-    let parts = crate::sweep::report::time_breakdown(&(sim.times - times_before), secs);
-    crate::sweep::report::write_time_breakdown(out, &parts, "  ")?;
-    writeln!(out, "neighbour rebuilds: {}", sim.rebuilds)?;
-    let (touching, _) = sim.contact_counts();
-    writeln!(
-        out,
-        "pairs at the end: {} listed, {touching} carrying force",
-        sim.pair_count()
-    )?;
-    writeln!(
-        out,
-        "final kinetic energy: {:.4e} J",
-        sim.particles.kinetic_energy()
-    )?;
-    // The bits of the final state: equal on 1 and 2 threads, and a check that a change
-    // meant to be pure speed changed nothing.
-    writeln!(out, "state hash: {:016x}", sim.state_hash())?;
-    writeln!(
-        out,
-        "heap bytes per particle: {:.0}",
-        sim.heap_bytes() as f64 / n_div
-    )?;
-    match peak_rss_kb() {
-        Some(kb) => writeln!(
-            out,
-            "peak RSS per particle: {:.3} kB ({kb} kB total)",
-            kb as f64 / n_div
-        )?,
-        None => writeln!(out, "peak RSS per particle: unknown (no /proc/self/status)")?,
-    }
-    if args.pair_phase_reps > 0 {
-        let t = sim.time_pair_phase(args.pair_phase_reps) / args.pair_phase_reps as f64;
-        writeln!(
-            out,
-            "pair phase alone: {:.3} ms per step, {:.2} ns per listed pair, {:.2} ns per pair carrying force",
-            t * 1e3,
-            t * 1e9 / sim.pair_count().max(1) as f64,
-            t * 1e9 / touching.max(1) as f64
-        )?;
-    }
-    writeln!(
-        out,
-        "particle-steps/s: {:.3e}",
-        n as f64 * sim.step as f64 / secs.max(1e-12)
-    )?;
-    Ok(())
-}
-
-/// VmHWM (peak resident set) in kB, from /proc/self/status.
-fn peak_rss_kb() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn args(cohesion: Cohesion) -> SettlingBedArgs {
-        SettlingBedArgs {
+    fn args(cohesion: Cohesion) -> SettlingBed {
+        SettlingBed {
             particles: 300,
-            steps: 0,
             threads: 1,
             seed: 1,
-            quiet: true,
             cohesion,
-            pair_phase_reps: 0,
-            pair_path: PairPathArg::Lanes,
         }
     }
 
@@ -327,7 +219,7 @@ mod tests {
     #[test]
     fn both_cohesions_build_and_run() {
         for c in [Cohesion::Jkr, Cohesion::Sjkr] {
-            let mut sim = Simulation::new(settling_bed_setup(&args(c)).unwrap()).unwrap();
+            let mut sim = Simulation::new(setup(&args(c)).unwrap()).unwrap();
             assert_eq!(sim.particles.len(), 300);
             let m = &sim.model;
             let (soil, floor, side) = (

@@ -1,0 +1,133 @@
+//! One run outside a sweep: `tilth run FILE`. A scene file is stepped to its end in this
+//! process ([`run_scene`]); an experiment file goes through the sweep machinery as a sweep of
+//! one run ([`run_experiment`]: pinned core, MCAP file, summary, resumable).
+
+use super::execute::{self, Options, SweepEnd};
+use super::job::{RunSummary, Status, read_summary, run_dir};
+use super::report::{RunCost, RunReport, Sample};
+use crate::config;
+use crate::progress::Progress;
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use tilth_kernel::sim::INSERT_EVERY;
+
+/// Steps the loaded scene to the end, recording samples; a kernel failure comes back as
+/// the error (with the scene's name).
+pub fn run_scene(
+    loaded: config::Loaded,
+    show_progress: bool,
+    setup_seconds: f64,
+) -> Result<RunReport> {
+    let config::Loaded {
+        mut sim,
+        threads,
+        steps,
+        sample_every,
+        info,
+    } = loaded;
+    let mut progress = Progress::new(steps, show_progress);
+    let mut samples = vec![];
+    if sample_every.is_some() {
+        samples.push(Sample::of(&sim));
+    }
+    let mut particle_steps: u64 = 0;
+    let times_before = sim.times;
+    let start = Instant::now();
+    // Stepped in runs of steps, not one `advance` at a time: each `run` enters the thread
+    // pool once, where a lone step pays for handing three phases to the workers and waking
+    // the caller (most of a small scene's time). The runs end where factories insert (so
+    // the particle count is known for each step) and where a sample is due.
+    let mut k: u64 = 0;
+    while k < steps {
+        let next_insert = (sim.step / INSERT_EVERY + 1) * INSERT_EVERY - sim.step;
+        let next_sample = sample_every.map_or(u64::MAX, |e| e - k % e);
+        let n = next_insert.min(next_sample).min(steps - k);
+        let before = sim.particles.len() as u64;
+        let stepped = sim.run(n);
+        if stepped.is_err() {
+            progress.finish();
+        }
+        stepped.with_context(|| info.origin.clone())?;
+        // Only the last step of a run can have inserted particles.
+        particle_steps += (n - 1) * before + sim.particles.len() as u64;
+        k += n;
+        if sample_every.is_some_and(|e| k % e == 0) {
+            samples.push(Sample::of(&sim));
+        }
+        progress.update(&sim);
+    }
+    let wall_seconds = start.elapsed().as_secs_f64();
+    progress.finish();
+    let times = sim.times - times_before;
+    let cost = RunCost {
+        threads,
+        setup_seconds,
+        wall_seconds,
+        times: &times,
+        particle_steps,
+    };
+    Ok(RunReport::new(&sim, &info, cost, samples))
+}
+
+/// What [`run_experiment`] did: the experiment, where its files are, its summary and
+/// whether it ran now or was found done.
+pub struct ExperimentRun {
+    /// The experiment file, as named.
+    pub origin: String,
+    /// The experiment's title.
+    pub title: String,
+    /// The output directory.
+    pub dir: PathBuf,
+    /// The run's summary (`None` if it wrote none).
+    pub summary: Option<RunSummary>,
+    /// Whether it ran now (false: found done in `dir`).
+    pub ran: bool,
+}
+
+/// Runs the experiment `file` as a sweep of one run into `out` (default `runs/<name>`).
+/// Returns the run and its status: `Err` when it failed or was interrupted (its files are
+/// written either way, so the caller can report them before the error).
+pub fn run_experiment(
+    file: &Path,
+    coarse: bool,
+    threads: Option<u64>,
+    out: Option<PathBuf>,
+    show_progress: bool,
+) -> Result<(ExperimentRun, Result<()>)> {
+    let mut plan = super::Plan::single(file, coarse)?;
+    if let Some(t) = threads {
+        plan.threads = t as usize;
+    }
+    let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&plan.name));
+    let stop = execute::stop_on_signals()?;
+    let opts = Options {
+        out: dir.clone(),
+        cores: Some(plan.threads),
+        shard: None,
+        retry_failed: true,
+        show_progress,
+        pin: false,
+    };
+    // A finished run in the directory is not run again: the caller says so.
+    let outcome = execute::execute(&plan, &opts, stop)?;
+    let summary = read_summary(&run_dir(&dir, 1));
+    let row = &outcome.rows[0];
+    let status = match row.status {
+        Status::Done => Ok(()),
+        Status::Interrupted => Err(SweepEnd::Interrupted.into()),
+        _ => Err(anyhow::anyhow!(
+            "{}: {}",
+            plan.origin,
+            row.error.clone().unwrap_or_else(|| "the run failed".into())
+        )),
+    };
+    let run = ExperimentRun {
+        origin: plan.origin.clone(),
+        title: plan.title.clone(),
+        dir,
+        summary,
+        ran: outcome.ran > 0,
+    };
+    Ok((run, status))
+}
