@@ -6,7 +6,7 @@ A refactor that must not change behaviour is checked by running the same command
 old and the new binary (for example the fast test tier, whose cases write their outputs
 under target/tmp) and comparing the two trees:
 
-    python3 tools/check/same_outputs.py OLD_DIR NEW_DIR
+    python3 tools/check/same_outputs.py OLD_DIR NEW_DIR [WHERE_OLD_WAS_MADE ...]
 
 JSON is compared value by value with volatile keys dropped; CSV cell by cell with volatile
 columns dropped; text files (md, toml, svg, html, txt, csv without a header we know) line by
@@ -24,6 +24,8 @@ VOLATILE_KEYS = {
     "created", "git_commit", "tilth", "wall_seconds", "setup_seconds", "seconds", "percent",
     "particle_steps_per_second", "time_breakdown", "started", "finished", "date", "host",
     "elapsed_seconds", "runs_per_hour", "recorder", "mcap_bytes", "bytes",
+    # The core a run was pinned to: whichever was free.
+    "cores",
 }
 VOLATILE_COLUMNS = {"wall_seconds", "wall_s", "seconds", "mcap"}
 TEXT = (".md", ".toml", ".svg", ".html", ".txt", ".csv", ".sh", ".out")
@@ -39,8 +41,25 @@ def scrub(value):
     return value
 
 
-def norm_text(text, root):
-    return text.replace(os.path.abspath(root), "<ROOT>").replace(root, "<ROOT>")
+def first_difference(a, b, path="$"):
+    """Where two JSON values first differ, as a path."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b)):
+            if a.get(k) != b.get(k):
+                return first_difference(a.get(k), b.get(k), f"{path}.{k}")
+    elif isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        for k, (x, y) in enumerate(zip(a, b)):
+            if x != y:
+                return first_difference(x, y, f"{path}[{k}]")
+    return f"{path}: {str(a)[:80]} vs {str(b)[:80]}"
+
+
+def norm_text(text, roots):
+    # Either tree's root in either file: a tree copied from where it was made still names
+    # the place it was made.
+    for root in roots:
+        text = text.replace(os.path.abspath(root), "<ROOT>")
+    return BUILD_HASH.sub("-<build>", text)
 
 
 def csv_rows(text):
@@ -51,20 +70,21 @@ def csv_rows(text):
     return [[r[i] for i in keep if i < len(r)] for r in rows]
 
 
-def compare_file(a, b, root_a, root_b):
-    if a.endswith(".mcap"):
+def compare_file(a, b, roots):
+    if a.endswith((".mcap", ".mcap.partial")):
+        # The metadata holds the commit; a killed run's partial file ends where it was killed.
         return None
     if a.endswith(".json"):
         try:
-            ja = json.loads(norm_text(open(a).read(), root_a))
-            jb = json.loads(norm_text(open(b).read(), root_b))
+            ja = json.loads(norm_text(open(a).read(), roots))
+            jb = json.loads(norm_text(open(b).read(), roots))
         except ValueError:
             pass
         else:
-            return None if scrub(ja) == scrub(jb) else "JSON values differ"
+            return None if scrub(ja) == scrub(jb) else "JSON values differ: " + first_difference(scrub(ja), scrub(jb))
     if a.endswith(TEXT):
-        ta = norm_text(open(a, errors="replace").read(), root_a)
-        tb = norm_text(open(b, errors="replace").read(), root_b)
+        ta = norm_text(open(a, errors="replace").read(), roots)
+        tb = norm_text(open(b, errors="replace").read(), roots)
         if a.endswith(".csv"):
             return None if csv_rows(ta) == csv_rows(tb) else "CSV cells differ"
         la = [l for l in ta.splitlines() if not VOLATILE_LINE.search(l)]
@@ -78,25 +98,32 @@ def compare_file(a, b, root_a, root_b):
     return None if open(a, "rb").read() == open(b, "rb").read() else "bytes differ"
 
 
+# The run cache's directories are named by a hash of the build (`repose-<16 hex>`).
+BUILD_HASH = re.compile(r"-[0-9a-f]{16}(?=/|$)")
+
+
 def files(root):
-    out = set()
+    """{path with build hashes masked: real relative path}."""
+    out = {}
     for dirpath, _, names in os.walk(root):
         for n in names:
-            out.add(os.path.relpath(os.path.join(dirpath, n), root))
+            rel = os.path.relpath(os.path.join(dirpath, n), root)
+            out[BUILD_HASH.sub("-<build>", rel)] = rel
     return out
 
 
 def main():
-    if len(sys.argv) != 3:
+    if len(sys.argv) < 3:
         print(__doc__)
         return 2
     old, new = sys.argv[1], sys.argv[2]
     fa, fb = files(old), files(new)
-    problems = [f"only in {old}: {p}" for p in sorted(fa - fb)]
-    problems += [f"only in {new}: {p}" for p in sorted(fb - fa)]
+    roots = [new, old] + sys.argv[3:]
+    problems = [f"only in {old}: {p}" for p in sorted(fa.keys() - fb.keys())]
+    problems += [f"only in {new}: {p}" for p in sorted(fb.keys() - fa.keys())]
     same = 0
-    for p in sorted(fa & fb):
-        why = compare_file(os.path.join(old, p), os.path.join(new, p), old, new)
+    for p in sorted(fa.keys() & fb.keys()):
+        why = compare_file(os.path.join(old, fa[p]), os.path.join(new, fb[p]), roots)
         if why:
             problems.append(f"{p}: {why}")
         else:
