@@ -10,7 +10,7 @@ parameters). Every run's value carries the grains' chaos (sd 2, independent betw
 runs, even of one seed at two settings: the chaotic extreme the discovery proof's per-seed
 slopes show); each measured value is the mean of 4 truth runs plus injected noise (sd 1).
 
-Each draw fits the data as `runner/src/commands/fit/mod.rs` does: R = 4 seeds, start
+Each draw fits the data as `runner/src/study/fit/mod.rs` does: R = 4 seeds, start
 (0.35, 0.0), Levenberg-Marquardt from lambda 1e-3 with the trust radius at a quarter of each
 range, halved on a rejected step, a setting accepted only if its measured chi^2 is lower,
 stopped at the noise (chi^2 <= dof and the predicted gain under chi^2_2's 95 % quantile),

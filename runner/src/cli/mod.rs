@@ -1,10 +1,12 @@
 //! The command-line surface: one file per command that parses its arguments, calls the
 //! library and prints.
 
-use crate::study::{calibrate, check, compare, diagnose, fit, next, project_report, rsm, synth};
+use crate::study::{calibrate, check, compare, diagnose, fit, next, project_report, synth};
 mod bench;
 mod laws;
 mod reduce;
+mod rsm;
+mod rsm_print;
 mod run;
 mod sweep;
 
@@ -76,14 +78,20 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Bench { which } => bench::bench(&which, out),
         Command::Sweep { command } => sweep::sweep(&command, out),
         Command::Reduce(args) => reduce::reduce_cmd(&args, out),
-        Command::Compare(args) => compare::compare(&args, out),
-        Command::Check(args) => check::check(&args, out),
+        Command::Compare(args) => print(out, compare::compare(&args)?),
+        Command::Check(args) => print(out, check::check(&args)?),
         Command::Rsm { command } => rsm::rsm(&command, out),
         Command::Calibrate(args) => calibrate::calibrate(&args, out),
-        Command::Synth(args) => synth::synth(&args, out),
-        Command::Report(args) => project_report::report(&args, out),
+        Command::Synth(args) => print(out, synth::synth(&args)?),
+        Command::Report(args) => print(out, project_report::report(&args)?),
         Command::Diagnose(args) => diagnose::diagnose(&args, out),
-        Command::Next(args) => next::next(&args, out),
+        Command::Next(args) => print(out, next::next(&args)?),
         Command::Fit(args) => fit::fit(&args, out),
     }
+}
+
+/// Writes a library function's summary to stdout.
+fn print(out: &mut dyn Write, text: String) -> Result<()> {
+    out.write_all(text.as_bytes())?;
+    Ok(())
 }

@@ -156,7 +156,14 @@ pub fn describe(pairs: &[PairCheck]) -> String {
     s
 }
 
-pub fn check(args: &CheckArgs, out: &mut dyn Write) -> Result<()> {
+pub fn check(args: &CheckArgs) -> Result<String> {
+    let mut text = Vec::new();
+    check_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`check`], writing its summary to `out`.
+fn check_into(args: &CheckArgs, out: &mut dyn Write) -> Result<()> {
     let rows = read_measurements(&args.data)?;
     if let Some(m) = &args.model {
         let model = Model::load(m)?;

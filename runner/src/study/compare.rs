@@ -72,7 +72,14 @@ pub struct Compared {
     pub problems: Vec<String>,
 }
 
-pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
+pub fn compare(args: &CompareArgs) -> Result<String> {
+    let mut text = Vec::new();
+    compare_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`compare`], writing its summary to `out`.
+fn compare_into(args: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     if args.replicates == 0 {
         bail!("--replicates 0 is out of range: allowed 1 or more");
     }

@@ -17,7 +17,5 @@ pub mod model_edit;
 pub mod next;
 pub mod project_report;
 pub mod project_story;
-pub mod rsm;
 pub mod rsm_plot;
-pub mod rsm_print;
 pub mod synth;

@@ -44,7 +44,14 @@ fn escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-pub fn report(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
+pub fn report(args: &ReportArgs) -> Result<String> {
+    let mut text = Vec::new();
+    report_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`report`], writing its summary to `out`.
+fn report_into(args: &ReportArgs, out: &mut dyn Write) -> Result<()> {
     if !args.project.is_dir() {
         bail!("{}: not a directory", args.project.display());
     }

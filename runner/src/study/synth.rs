@@ -222,7 +222,14 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
     Ok(rows)
 }
 
-pub fn synth(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
+pub fn synth(args: &SynthArgs) -> Result<String> {
+    let mut text = Vec::new();
+    synth_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`synth`], writing its summary to `out`.
+fn synth_into(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     let mut truth = std::path::absolute(&args.truth)?;
     let mut model = Model::load(&truth)?;

@@ -7,7 +7,7 @@ For each case (`base`: the model of models/li2022.toml as LAMMPS writes it; `twi
 same with LAMMPS's `twisting marshall`, an effect the model lacks) and each moisture level it
 runs funnel.lammps REPLICATES times from different random packings, reduces every run to the
 lab's four readings with the definitions of runner/src/lab/repose.rs, discharge.rs and
-runner/src/sweep/observe.rs, and writes <case>.csv (the measurement file `tilth diagnose`
+runner/src/lab/observe.rs, and writes <case>.csv (the measurement file `tilth diagnose`
 reads) and <case>-runs.csv (every run's readings). Needs `lmp` (Debian package lammps,
 20220106) and Python 3.11 (tomllib); LMP=/path/to/lmp overrides.
 """

@@ -38,7 +38,7 @@
 //! the free parameters' noise: it matters when their recalibration is large and their steps
 //! are short, and a statistic without it is too large then: an absorbable misfit leaks
 //! through a noisy X̂ into every candidate (`tilth fit` takes the same noise off J'J,
-//! `runner/src/commands/fit/jacobian_noise.rs`).
+//! `runner/src/study/fit/jacobian_noise.rs`).
 //!
 //! Reference: Rao (1948), score tests; Engle (1984), "Wald, likelihood ratio, and Lagrange
 //! multiplier tests in econometrics", Handbook of Econometrics II, ch. 13; Holm (1979),

@@ -89,7 +89,14 @@ struct Variant {
     step: f64,
 }
 
-pub fn next(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
+pub fn next(args: &NextArgs) -> Result<String> {
+    let mut text = Vec::new();
+    next_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`next`], writing its summary to `out`.
+fn next_into(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
     let (d, rivals, path) = load(args)?;
     let model = Model::load(&std::path::absolute(&d.model)?)?;
     let menu = read_menu(&args.menu)?;

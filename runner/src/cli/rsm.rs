@@ -286,11 +286,11 @@ fn solve(a: &SolveArgs, out: &mut dyn Write) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("{}: cannot create", dir.display()))?;
         for s in &solutions {
-            if let Some(path) = super::rsm_plot::contour(&anova, s, &fixed, dir)? {
+            if let Some(path) = crate::study::rsm_plot::contour(&anova, s, &fixed, dir)? {
                 eprintln!("plot {}", path.display());
             }
         }
-        if let Some(path) = super::rsm_plot::curve(&anova, &solutions, &fixed, dir)? {
+        if let Some(path) = crate::study::rsm_plot::curve(&anova, &solutions, &fixed, dir)? {
             eprintln!("plot {}", path.display());
         }
     }
@@ -509,7 +509,7 @@ fn fit(a: &FitArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("{}: cannot create", dir.display()))?;
-        for p in super::rsm_plot::fit(&anova, dir)? {
+        for p in crate::study::rsm_plot::fit(&anova, dir)? {
             eprintln!("plot {}", p.display());
         }
     }
