@@ -265,32 +265,7 @@ pub fn verdict(
     // The first of an ambiguous set: the misfit is judged with it in.
     let mut first_of_ambiguous = None;
 
-    // On their own (given the free parameters): who is significant, and each given each.
-    let alone: Vec<(usize, f64)> = left
-        .iter()
-        .map(|&k| (k, cols.conditional(&r, &base, p + k).1))
-        .collect();
-    let contenders: Vec<usize> = alone
-        .iter()
-        .filter(|(_, pr)| *pr < alpha)
-        .map(|(k, _)| *k)
-        .collect();
-    let mut encompassing = vec![];
-    for &a in &contenders {
-        for &b in &contenders {
-            if a != b {
-                let mut s = base.clone();
-                s.push(p + b);
-                let (statistic, p_value, _) = cols.conditional(&r, &s, p + a);
-                encompassing.push(Encompassing {
-                    needed: candidates[a].name.clone(),
-                    given: candidates[b].name.clone(),
-                    statistic,
-                    p_value,
-                });
-            }
-        }
-    }
+    let encompassing = encompassing_tests(&cols, &r, &left, candidates, alpha);
 
     while !left.is_empty() {
         let tests: Vec<(f64, f64)> = left
@@ -343,9 +318,60 @@ pub fn verdict(
         .collect();
     let with_best: Vec<usize> = base.iter().copied().chain(first_of_ambiguous).collect();
     let misfit = cols.misfit(&r, &with_best);
-    // The best single candidate (of an ambiguous set, the first) leaves a significant misfit:
-    // what is left is none of them, whatever they cannot be told apart on.
-    let kind = if misfit.p_value < alpha {
+    Verdict {
+        verdict: kind(&misfit, &ambiguous, &effects, alpha),
+        effects,
+        ambiguous,
+        encompassing,
+        misfit,
+        alpha,
+    }
+}
+
+/// Among the candidates `left` significant on their own (given the free parameters alone),
+/// each tested given each other one.
+fn encompassing_tests(
+    cols: &Columns,
+    r: &DVector<f64>,
+    left: &[usize],
+    candidates: &[Candidate],
+    alpha: f64,
+) -> Vec<Encompassing> {
+    let p = cols.params;
+    let base: Vec<usize> = (0..p).collect();
+    let alone: Vec<(usize, f64)> = left
+        .iter()
+        .map(|&k| (k, cols.conditional(r, &base, p + k).1))
+        .collect();
+    let contenders: Vec<usize> = alone
+        .iter()
+        .filter(|(_, pr)| *pr < alpha)
+        .map(|(k, _)| *k)
+        .collect();
+    let mut encompassing = vec![];
+    for &a in &contenders {
+        for &b in &contenders {
+            if a != b {
+                let mut s = base.clone();
+                s.push(p + b);
+                let (statistic, p_value, _) = cols.conditional(r, &s, p + a);
+                encompassing.push(Encompassing {
+                    needed: candidates[a].name.clone(),
+                    given: candidates[b].name.clone(),
+                    statistic,
+                    p_value,
+                });
+            }
+        }
+    }
+    encompassing
+}
+
+/// The verdict's kind. A significant misfit comes first: when the best single candidate (of
+/// an ambiguous set, the first) leaves one, what is left is none of them, whatever they
+/// cannot be told apart on.
+fn kind(misfit: &Misfit, ambiguous: &[String], effects: &[Named], alpha: f64) -> Kind {
+    if misfit.p_value < alpha {
         Kind::NoneOfTheCandidates
     } else if !ambiguous.is_empty() {
         Kind::Ambiguous
@@ -353,14 +379,6 @@ pub fn verdict(
         Kind::NoEffect
     } else {
         Kind::Effect
-    };
-    Verdict {
-        verdict: kind,
-        effects,
-        ambiguous,
-        encompassing,
-        misfit,
-        alpha,
     }
 }
 

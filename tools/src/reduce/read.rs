@@ -215,31 +215,13 @@ pub fn read_run(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Run, Re
                 usize::try_from(size.max(RECORD_LIMIT)).unwrap_or(usize::MAX),
             ),
     );
-
-    let mut schemas: HashMap<u16, String> = HashMap::new();
-    let mut channels: HashMap<u16, Kind> = HashMap::new();
-    let mut run = Run {
-        path: path.to_path_buf(),
-        file: file.clone(),
-        completeness: Completeness {
-            complete: true,
-            reason: None,
-        },
-        metadata: BTreeMap::new(),
-        scalars: BTreeMap::new(),
-        cloud: None,
-        cloud_frames: 0,
-        last_time_s: None,
-    };
-    // The raw bytes of the chosen frame so far; decoded once at the end.
-    let mut chosen: Option<(u64, Vec<u8>)> = None;
-    let mut seen_header = false;
+    let mut stream = Stream::new(path, &file, options.cloud);
     let mut broken: Option<String> = None;
 
     while let Some(event) = reader.next_event() {
         let event = match event {
             Ok(e) => e,
-            Err(source) if !seen_header => {
+            Err(source) if !stream.seen_header => {
                 return Err(ReduceError::NotMcap {
                     file,
                     cause: source,
@@ -261,97 +243,174 @@ pub fn read_run(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Run, Re
         };
         let record = match mcap::parse_record(opcode, data) {
             Ok(r) => r,
-            Err(cause) if !seen_header => return Err(ReduceError::NotMcap { file, cause }),
+            Err(cause) if !stream.seen_header => {
+                return Err(ReduceError::NotMcap { file, cause });
+            }
             Err(e) => {
                 broken = Some(e.to_string());
                 break;
             }
         };
-        match record {
-            Record::Header(_) => seen_header = true,
-            Record::Schema { header, .. } => {
-                schemas.insert(header.id, header.name);
-            }
-            Record::Channel(ch) => {
-                let schema = schemas.get(&ch.schema_id).cloned().unwrap_or_default();
-                let kind = classify(&file, &ch.topic, &schema, &ch.message_encoding)?;
-                channels.insert(ch.id, kind);
-            }
-            Record::Metadata(m) => {
-                run.metadata.insert(m.name, m.metadata);
-            }
-            Record::Message { header, data } => {
-                let t = header.log_time;
-                run.last_time_s = Some(seconds(t));
-                match channels.get(&header.channel_id) {
-                    Some(Kind::Scalar(name)) => {
-                        let v =
-                            Vector3::decode(&data[..]).map_err(|cause| ReduceError::Decode {
-                                file: file.clone(),
-                                topic: format!("{SCALARS}{name}"),
-                                cause,
-                            })?;
-                        let s = run.scalars.entry(name.clone()).or_default();
-                        s.time_s.push(seconds(t));
-                        s.value.push(v.x);
-                    }
-                    Some(Kind::Particles) => {
-                        let index = run.cloud_frames;
-                        run.cloud_frames += 1;
-                        let keep = match options.cloud {
-                            CloudChoice::None => false,
-                            CloudChoice::Last => true,
-                            CloudChoice::Index(k) => k == index,
-                            CloudChoice::AtOrBefore(limit) => seconds(t) <= limit,
-                        };
-                        if keep {
-                            let slot = chosen.get_or_insert_with(|| (t, Vec::new()));
-                            slot.0 = t;
-                            slot.1.clear();
-                            slot.1.extend_from_slice(&data);
-                        }
-                    }
-                    Some(Kind::Other) | None => {}
-                }
-            }
-            _ => {}
+        stream.take(record)?;
+    }
+
+    let Stream {
+        mut run, chosen, ..
+    } = stream;
+    run.completeness = completeness(path, broken, size, run.last_time_s);
+    if let Some((t, bytes)) = chosen {
+        run.cloud = Some(decode_cloud(file, t, &bytes)?);
+    }
+    Ok(run)
+}
+
+/// What the records read so far have given: the channels known and the run being filled.
+struct Stream<'a> {
+    file: &'a str,
+    cloud: CloudChoice,
+    /// Schema names by id.
+    schemas: HashMap<u16, String>,
+    channels: HashMap<u16, Kind>,
+    run: Run,
+    /// The raw bytes of the chosen frame so far, with its log time; decoded once at the end.
+    chosen: Option<(u64, Vec<u8>)>,
+    /// Whether the MCAP header has been read: a failure before it means no MCAP file.
+    seen_header: bool,
+}
+
+impl<'a> Stream<'a> {
+    fn new(path: &Path, file: &'a str, cloud: CloudChoice) -> Stream<'a> {
+        Stream {
+            file,
+            cloud,
+            schemas: HashMap::new(),
+            channels: HashMap::new(),
+            run: Run {
+                path: path.to_path_buf(),
+                file: file.to_string(),
+                completeness: Completeness {
+                    complete: true,
+                    reason: None,
+                },
+                metadata: BTreeMap::new(),
+                scalars: BTreeMap::new(),
+                cloud: None,
+                cloud_frames: 0,
+                last_time_s: None,
+            },
+            chosen: None,
+            seen_header: false,
         }
     }
 
+    /// Takes in one record: the header, a schema, a channel (refused if it breaks the
+    /// contract), a metadata record or a message; the rest is skipped.
+    fn take(&mut self, record: Record<'_>) -> Result<(), ReduceError> {
+        match record {
+            Record::Header(_) => self.seen_header = true,
+            Record::Schema { header, .. } => {
+                self.schemas.insert(header.id, header.name);
+            }
+            Record::Channel(ch) => {
+                let schema = self.schemas.get(&ch.schema_id).cloned().unwrap_or_default();
+                let kind = classify(self.file, &ch.topic, &schema, &ch.message_encoding)?;
+                self.channels.insert(ch.id, kind);
+            }
+            Record::Metadata(m) => {
+                self.run.metadata.insert(m.name, m.metadata);
+            }
+            Record::Message { header, data } => {
+                self.message(header.channel_id, header.log_time, &data)?;
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// One message at log time `t` (ns): a scalar's value appended to its series, a particle
+    /// frame counted and its bytes kept if it is the one chosen so far.
+    fn message(&mut self, channel: u16, t: u64, data: &[u8]) -> Result<(), ReduceError> {
+        let run = &mut self.run;
+        run.last_time_s = Some(seconds(t));
+        match self.channels.get(&channel) {
+            Some(Kind::Scalar(name)) => {
+                let v = Vector3::decode(data).map_err(|cause| ReduceError::Decode {
+                    file: self.file.to_string(),
+                    topic: format!("{SCALARS}{name}"),
+                    cause,
+                })?;
+                let s = run.scalars.entry(name.clone()).or_default();
+                s.time_s.push(seconds(t));
+                s.value.push(v.x);
+            }
+            Some(Kind::Particles) => {
+                let index = run.cloud_frames;
+                run.cloud_frames += 1;
+                let keep = match self.cloud {
+                    CloudChoice::None => false,
+                    CloudChoice::Last => true,
+                    CloudChoice::Index(k) => k == index,
+                    CloudChoice::AtOrBefore(limit) => seconds(t) <= limit,
+                };
+                if keep {
+                    let slot = self.chosen.get_or_insert_with(|| (t, Vec::new()));
+                    slot.0 = t;
+                    slot.1.clear();
+                    slot.1.extend_from_slice(data);
+                }
+            }
+            Some(Kind::Other) | None => {}
+        }
+        Ok(())
+    }
+}
+
+/// Whether a file read to its end, or to `broken` (the error where it broke off), is
+/// complete: not if it breaks off, nor if it still has its `.partial` name.
+fn completeness(
+    path: &Path,
+    broken: Option<String>,
+    size: u64,
+    last_time_s: Option<f64>,
+) -> Completeness {
     if let Some(error) = broken {
-        run.completeness = Completeness {
+        Completeness {
             complete: false,
             reason: Some(format!(
                 "the file breaks off ({error}) in its {size} bytes: the run was cut short; \
                  read up to its last whole chunk{}",
-                match run.last_time_s {
+                match last_time_s {
                     Some(t) => format!(", last message at t = {t} s"),
                     None => String::from(", which holds no message"),
                 }
             )),
-        };
+        }
     } else if path.to_string_lossy().ends_with(".partial") {
-        run.completeness = Completeness {
+        Completeness {
             complete: false,
             reason: Some(
                 "the file still has its .partial name: the run was interrupted before it \
                  finished"
                     .to_string(),
             ),
-        };
+        }
+    } else {
+        Completeness {
+            complete: true,
+            reason: None,
+        }
     }
+}
 
-    if let Some((t, bytes)) = chosen {
-        let msg = PointCloud::decode(&bytes[..]).map_err(|cause| ReduceError::Decode {
-            file: file.clone(),
-            topic: PARTICLES.to_string(),
-            cause,
-        })?;
-        let cloud = ParticleCloud::from_point_cloud(&msg, seconds(t))
-            .map_err(|problem| ReduceError::CloudLayout { file, problem })?;
-        run.cloud = Some(cloud);
-    }
-    Ok(run)
+/// Decodes the chosen `/particles` frame, logged at `t` (ns).
+fn decode_cloud(file: String, t: u64, bytes: &[u8]) -> Result<ParticleCloud, ReduceError> {
+    let msg = PointCloud::decode(bytes).map_err(|cause| ReduceError::Decode {
+        file: file.clone(),
+        topic: PARTICLES.to_string(),
+        cause,
+    })?;
+    ParticleCloud::from_point_cloud(&msg, seconds(t))
+        .map_err(|problem| ReduceError::CloudLayout { file, problem })
 }
 
 /// Nanoseconds of log time -> seconds (a division, so whole seconds come out exact).

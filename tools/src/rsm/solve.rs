@@ -63,23 +63,83 @@ pub fn solve(
     fixed: &[(usize, f64)],
 ) -> Result<Solution, RsmError> {
     let k = anova.factors.len();
-    let fixed_z: Vec<Option<f64>> = (0..k)
-        .map(|i| {
-            fixed
-                .iter()
-                .find(|f| f.0 == i)
-                .map(|f| (f.1 - anova.coding.centre(i)) / anova.coding.half(i))
-        })
-        .collect();
+    let fixed_z = fixed_coded(anova, fixed);
     let free: Vec<usize> = (0..k).filter(|i| fixed_z[*i].is_none()).collect();
     if free.is_empty() {
         return Err(RsmError::Request(
             "every factor is fixed: nothing to solve for".into(),
         ));
     }
+    let points = trace(anova, &fixed_z, &free, target);
+    let settings: Vec<Setting> = points
+        .iter()
+        .map(|z| Setting {
+            values: anova.coding.real(z),
+            predicted: anova.predict_coded(z),
+        })
+        .collect();
+    let free_names: Vec<String> = free.iter().map(|&i| anova.factors[i].clone()).collect();
+    let extent = extent(anova, &settings);
+    let moving = moving(anova, &free, &extent, settings.len());
+    let identifiable = !settings.is_empty() && moving.len() < 2;
+    let (closest, statement) = if settings.is_empty() {
+        let c = closest_setting(anova, &fixed_z, &free, target);
+        let s = format!(
+            "no setting within the design's ranges predicts {target} for {}; the closest, {}, predicts {:.4}",
+            anova.response,
+            describe(&anova.factors, &c.values),
+            c.predicted
+        );
+        (Some(c), s)
+    } else if identifiable {
+        (
+            None,
+            format!(
+                "{} setting(s) predict {target}: the target pins the free factors ({}) down",
+                settings.len(),
+                free_names.join(", ")
+            ),
+        )
+    } else {
+        let ridge = ridge_statement(anova, free.len(), &moving, settings.len(), target);
+        (None, ridge)
+    };
+    Ok(Solution {
+        label: label.to_string(),
+        target,
+        free: free_names,
+        dimension: if settings.is_empty() {
+            0
+        } else {
+            free.len() - 1
+        },
+        settings,
+        extent,
+        identifiable,
+        closest,
+        statement,
+    })
+}
+
+/// Each factor's fixed value in coded units, z = (x - centre) / half-range; `None` if free.
+fn fixed_coded(anova: &Anova, fixed: &[(usize, f64)]) -> Vec<Option<f64>> {
+    (0..anova.factors.len())
+        .map(|i| {
+            fixed
+                .iter()
+                .find(|f| f.0 == i)
+                .map(|f| (f.1 - anova.coding.centre(i)) / anova.coding.half(i))
+        })
+        .collect()
+}
+
+/// Every coded setting within [-1, 1] that hits `target`: each free factor in turn solved
+/// exactly along grid lines of the others, sorted along the free factors and with
+/// duplicates (within 1e-9) removed.
+fn trace(anova: &Anova, fixed_z: &[Option<f64>], free: &[usize], target: f64) -> Vec<Vec<f64>> {
     let n = grid_size(free.len());
     let mut points: Vec<Vec<f64>> = Vec::new();
-    for &solved in &free {
+    for &solved in free {
         let others: Vec<usize> = free.iter().copied().filter(|i| *i != solved).collect();
         let total = n.pow(others.len() as u32);
         for flat in 0..total {
@@ -109,15 +169,12 @@ pub fn solve(
             .unwrap_or(std::cmp::Ordering::Equal)
     });
     points.dedup_by(|a, b| a.iter().zip(b.iter()).all(|(x, y)| (x - y).abs() < 1e-9));
-    let settings: Vec<Setting> = points
-        .iter()
-        .map(|z| Setting {
-            values: anova.coding.real(z),
-            predicted: anova.predict_coded(z),
-        })
-        .collect();
-    let free_names: Vec<String> = free.iter().map(|&i| anova.factors[i].clone()).collect();
-    let extent: Vec<(String, f64, f64)> = (0..k)
+    points
+}
+
+/// Each factor's (name, min, max) over `settings`, real units.
+fn extent(anova: &Anova, settings: &[Setting]) -> Vec<(String, f64, f64)> {
+    (0..anova.factors.len())
         .map(|i| {
             let (lo, hi) = settings
                 .iter()
@@ -126,78 +183,55 @@ pub fn solve(
                 });
             (anova.factors[i].clone(), lo, hi)
         })
-        .collect();
-    // A free factor "moves" along the solutions when it spans over a tenth of its range.
-    let spans: Vec<(String, f64, f64, f64)> = free
-        .iter()
+        .collect()
+}
+
+/// The free factors that move along the solutions, as (name, min, max, share of the range):
+/// those spanning over a tenth of their range, when there is more than one setting.
+fn moving(
+    anova: &Anova,
+    free: &[usize],
+    extent: &[(String, f64, f64)],
+    settings: usize,
+) -> Vec<(String, f64, f64, f64)> {
+    free.iter()
         .map(|&i| {
             let e = &extent[i];
             let frac = (e.2 - e.1) / (anova.coding.high[i] - anova.coding.low[i]);
             (e.0.clone(), e.1, e.2, frac)
         })
-        .collect();
-    let moving: Vec<&(String, f64, f64, f64)> = spans
+        .filter(|s| settings > 1 && s.3 > 0.1)
+        .collect()
+}
+
+/// The finding when the target cannot separate the `moving` factors: the ridge (two free
+/// factors) or surface of `settings` points, and how far each factor moves along it.
+fn ridge_statement(
+    anova: &Anova,
+    free: usize,
+    moving: &[(String, f64, f64, f64)],
+    settings: usize,
+    target: f64,
+) -> String {
+    let along: Vec<String> = moving
         .iter()
-        .filter(|s| settings.len() > 1 && s.3 > 0.1)
+        .map(|(name, lo, hi, _)| {
+            format!("{name} from {} to {}", significant4(*lo), significant4(*hi))
+        })
         .collect();
-    let identifiable = !settings.is_empty() && moving.len() < 2;
-    let (closest, statement) = if settings.is_empty() {
-        let c = closest_setting(anova, &fixed_z, &free, target);
-        let s = format!(
-            "no setting within the design's ranges predicts {target} for {}; the closest, {}, predicts {:.4}",
-            anova.response,
-            describe(&anova.factors, &c.values),
-            c.predicted
-        );
-        (Some(c), s)
-    } else if identifiable {
-        (
-            None,
-            format!(
-                "{} setting(s) predict {target}: the target pins the free factors ({}) down",
-                settings.len(),
-                free_names.join(", ")
-            ),
-        )
-    } else {
-        let along: Vec<String> = moving
-            .iter()
-            .map(|(name, lo, hi, _)| {
-                format!("{name} from {} to {}", significant4(*lo), significant4(*hi))
-            })
-            .collect();
-        let names: Vec<&str> = moving.iter().map(|m| m.0.as_str()).collect();
-        (
-            None,
-            format!(
-                "one target cannot separate {}: every setting on this {} of {} points predicts {} = {target} ({} along it). Fix all but one of them, or add an observable that depends on them differently (a shear or compression test, a second repose test).",
-                names.join(" and "),
-                if free.len() == 2 {
-                    "ridge (a curve)"
-                } else {
-                    "surface"
-                },
-                settings.len(),
-                anova.response,
-                along.join(", ")
-            ),
-        )
-    };
-    Ok(Solution {
-        label: label.to_string(),
-        target,
-        free: free_names,
-        dimension: if settings.is_empty() {
-            0
+    let names: Vec<&str> = moving.iter().map(|m| m.0.as_str()).collect();
+    format!(
+        "one target cannot separate {}: every setting on this {} of {} points predicts {} = {target} ({} along it). Fix all but one of them, or add an observable that depends on them differently (a shear or compression test, a second repose test).",
+        names.join(" and "),
+        if free == 2 {
+            "ridge (a curve)"
         } else {
-            free.len() - 1
+            "surface"
         },
         settings,
-        extent,
-        identifiable,
-        closest,
-        statement,
-    })
+        anova.response,
+        along.join(", ")
+    )
 }
 
 /// Roots in [-1, 1] of predicted(z with z[i] = t) = target: the surface is at most

@@ -42,6 +42,9 @@ const GREY: RGBColor = RGBColor(127, 127, 127);
 const GRID_FINE: RGBColor = RGBColor(238, 238, 238);
 const GRID_BOLD: RGBColor = RGBColor(205, 205, 205);
 
+/// A chart in data coordinates on an SVG page, as every picture here draws.
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 /// Maps any drawing error to [`ReduceError::Plot`] for the picture `what`.
 fn plot_error<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> ReduceError {
     move |e| ReduceError::Plot {
@@ -96,7 +99,7 @@ fn titled<'a>(
 
 /// Draws the grid, axes and labels of `chart` in the common style.
 fn mesh<'a, 'b>(
-    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    chart: &mut Chart<'a, 'b>,
     x_desc: &str,
     y_desc: &str,
     what: &'static str,
@@ -114,7 +117,7 @@ fn mesh<'a, 'b>(
 
 /// Draws the legend of `chart` at `position` on an opaque white box.
 fn legend<'a, 'b: 'a>(
-    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    chart: &mut Chart<'a, 'b>,
     position: SeriesLabelPosition,
     what: &'static str,
 ) -> Result<(), ReduceError> {

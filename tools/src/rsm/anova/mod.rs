@@ -14,12 +14,16 @@
 //! References: Montgomery, *Design and Analysis of Experiments* (8th ed., 2013), ch. 6, 10, 11;
 //! Myers, Montgomery & Anderson-Cook, *Response Surface Methodology* (4th ed., 2016).
 
+mod goodness;
+mod rows;
+
 use super::ols::{Ols, full_rank, ols};
 use super::terms::{Order, Term, is_centre};
 use super::{Coding, Data, RsmError};
+use goodness::goodness;
 use nalgebra::DMatrix;
+use rows::{PartialSums, ResidualTest, lack_of_fit, model_rows, term_rows};
 use serde::Serialize;
-use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
 /// What to fit.
 #[derive(Debug, Clone, Copy)]
@@ -213,14 +217,6 @@ fn weakest_removable(terms: &[Term], a: &Anova) -> Option<(usize, f64)> {
         .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
-fn p_value(f: f64, d1: usize, d2: usize) -> Option<f64> {
-    if d1 == 0 || d2 == 0 || !f.is_finite() {
-        return None;
-    }
-    let dist = FisherSnedecor::new(d1 as f64, d2 as f64).ok()?;
-    Some(dist.sf(f.max(0.0)))
-}
-
 fn analyse(
     data: &Data,
     z: &[Vec<f64>],
@@ -242,163 +238,24 @@ fn analyse(
     let sst: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
     let mut notes = Vec::new();
 
-    let partial = |drop: &[usize]| -> f64 {
-        let keep: Vec<Term> = terms
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| !drop.contains(k))
-            .map(|(_, t)| *t)
-            .collect();
-        let reduced = ols(&matrix(z, &keep), y).map_or(sst, |o| o.sse);
-        (reduced - full.sse).max(0.0)
+    let partial = PartialSums {
+        z,
+        y,
+        terms,
+        sst,
+        sse: full.sse,
     };
-    let f_of = |ss: f64, df: usize| mse.filter(|m| *m > 0.0).map(|m| ss / df as f64 / m);
-
-    let rows: Vec<TermRow> = terms
-        .iter()
-        .enumerate()
-        .map(|(k, t)| {
-            let ss = partial(&[k]);
-            let coefficient = full.coef[k + 1];
-            let se = mse.map(|m| (m * full.xtx_inv[(k + 1, k + 1)]).sqrt());
-            let f = f_of(ss, 1);
-            TermRow {
-                name: t.name(names),
-                coefficient,
-                std_error: se,
-                t: se.filter(|s| *s > 0.0).map(|s| coefficient / s),
-                sum_sq: ss,
-                df: 1,
-                mean_sq: ss,
-                f,
-                p: f.and_then(|f| p_value(f, 1, dfe)),
-                contribution_pct: if sst > 0.0 { 100.0 * ss / sst } else { 0.0 },
-            }
-        })
-        .collect();
-
-    let curv_idx = terms.iter().position(|t| *t == Term::Curvature);
-    let model_idx: Vec<usize> = (0..terms.len()).filter(|k| Some(*k) != curv_idx).collect();
-    // The model's sum of squares: what its terms explain beyond the mean (and beyond the
-    // curvature indicator when there is one).
-    let model_ss = match curv_idx {
-        Some(_) => partial(&model_idx),
-        None => (sst - full.sse).max(0.0),
-    };
-    let model_df = model_idx.len();
-    let source_row = |ss: f64, df: usize| {
-        let f = f_of(ss, df);
-        SourceRow {
-            sum_sq: ss,
-            df,
-            mean_sq: (df > 0).then(|| ss / df as f64),
-            f,
-            p: f.and_then(|f| p_value(f, df, dfe)),
-        }
-    };
-    let model = source_row(model_ss, model_df);
-    let curvature = curv_idx.map(|k| source_row(rows[k].sum_sq, 1));
-
-    // Pure error: scatter of the responses within groups of identical settings.
-    let mut groups: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
-    for (zr, &yr) in z.iter().zip(y) {
-        match groups
-            .iter_mut()
-            .find(|(g, _)| g.iter().zip(zr).all(|(a, b)| (a - b).abs() < 1e-9))
-        {
-            Some((_, ys)) => ys.push(yr),
-            None => groups.push((zr.clone(), vec![yr])),
-        }
-    }
-    let pe_df: usize = groups.iter().map(|(_, ys)| ys.len() - 1).sum();
-    let pe_ss: f64 = groups
-        .iter()
-        .map(|(_, ys)| {
-            let m = ys.iter().sum::<f64>() / ys.len() as f64;
-            ys.iter().map(|v| (v - m).powi(2)).sum::<f64>()
-        })
-        .sum();
-    let (lack_of_fit, pure_error) = if pe_df > 0 && dfe > pe_df {
-        let lof_df = dfe - pe_df;
-        let lof_ss = (full.sse - pe_ss).max(0.0);
-        let pe_ms = pe_ss / pe_df as f64;
-        let f = (pe_ms > 0.0).then(|| lof_ss / lof_df as f64 / pe_ms);
-        (
-            Some(SourceRow {
-                sum_sq: lof_ss,
-                df: lof_df,
-                mean_sq: Some(lof_ss / lof_df as f64),
-                f,
-                p: f.and_then(|f| p_value(f, lof_df, pe_df)),
-            }),
-            Some(SourceRow {
-                sum_sq: pe_ss,
-                df: pe_df,
-                mean_sq: Some(pe_ms),
-                f: None,
-                p: None,
-            }),
-        )
-    } else {
-        notes.push(if pe_df == 0 {
-            "no replicated settings: pure error and lack of fit cannot be estimated".to_string()
-        } else {
-            "every residual degree of freedom is pure error: lack of fit cannot be tested"
-                .to_string()
-        });
-        (None, None)
-    };
+    let test = ResidualTest { mse, dfe };
+    let rows = term_rows(&full, terms, names, &partial, &test);
+    let (model, curvature) = model_rows(terms, &rows, &partial, &test);
+    let (lack_of_fit, pure_error) = lack_of_fit(z, y, full.sse, dfe, &mut notes);
     if dfe == 0 {
         notes.push(
             "no residual degrees of freedom: the model goes through every run; F and p-values cannot be computed"
                 .into(),
         );
     }
-
-    let r2 = if sst > 0.0 { 1.0 - full.sse / sst } else { 1.0 };
-    let adj_r2 = mse.map(|m| 1.0 - m / (sst / (n - 1) as f64));
-    let press = if full.leverage.iter().all(|h| *h < 1.0 - 1e-9) {
-        Some(
-            full.fitted
-                .iter()
-                .zip(y)
-                .zip(&full.leverage)
-                .map(|((f, v), h)| ((v - f) / (1.0 - h)).powi(2))
-                .sum::<f64>(),
-        )
-    } else {
-        notes.push(
-            "a run has leverage 1 (the model must pass through it): predicted R^2 is not defined"
-                .into(),
-        );
-        None
-    };
-    let pred_r2 = press.map(|p| 1.0 - p / sst);
-    if let (Some(a), Some(pr)) = (adj_r2, pred_r2) {
-        if a - pr > 0.2 {
-            notes.push(format!(
-                "predicted R^2 {pr:.4} is more than 0.2 below adjusted R^2 {a:.4}: consider reducing the model, a response transformation, or an outlier"
-            ));
-        }
-        if pr < 0.0 {
-            notes.push(
-                "a negative predicted R^2: the overall mean predicts better than this model".into(),
-            );
-        }
-    }
-    let (lo, hi) = full
-        .fitted
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(*v), b.max(*v))
-        });
-    let adeq_precision = mse
-        .filter(|m| *m > 0.0)
-        .map(|m| (hi - lo) / (p as f64 * m / n as f64).sqrt());
-    let std_dev = mse.map(f64::sqrt);
-    let cv_pct = std_dev
-        .filter(|_| mean != 0.0)
-        .map(|s| 100.0 * s / mean.abs());
+    let fit = goodness(&full, y, p, mse, mean, sst, &mut notes);
 
     let state = FitState {
         terms: terms.to_vec(),
@@ -438,31 +295,36 @@ fn analyse(
             f: None,
             p: None,
         },
-        r2,
-        adj_r2,
-        pred_r2,
-        press,
-        adeq_precision,
-        std_dev,
+        r2: fit.r2,
+        adj_r2: fit.adj_r2,
+        pred_r2: fit.pred_r2,
+        press: fit.press,
+        adeq_precision: fit.adeq_precision,
+        std_dev: fit.std_dev,
         mean,
-        cv_pct,
+        cv_pct: fit.cv_pct,
         removed,
         notes,
-        diagnostics: y
-            .iter()
-            .zip(&data.x)
-            .zip(&full.fitted)
-            .zip(&full.leverage)
-            .map(|(((a, x), f), h)| RunDiagnostic {
-                settings: x.clone(),
-                actual: *a,
-                predicted: *f,
-                residual: a - f,
-                leverage: *h,
-            })
-            .collect(),
+        diagnostics: run_diagnostics(data, &full),
         fit: state,
     })
+}
+
+/// Each run's settings, response, fitted value, residual and leverage.
+fn run_diagnostics(data: &Data, full: &Ols) -> Vec<RunDiagnostic> {
+    data.y
+        .iter()
+        .zip(&data.x)
+        .zip(&full.fitted)
+        .zip(&full.leverage)
+        .map(|(((a, x), f), h)| RunDiagnostic {
+            settings: x.clone(),
+            actual: *a,
+            predicted: *f,
+            residual: a - f,
+            leverage: *h,
+        })
+        .collect()
 }
 
 /// The highest order among the terms (after elimination the model may be partial).
