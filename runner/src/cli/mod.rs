@@ -81,7 +81,7 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Compare(args) => print(out, compare::compare(&args)?),
         Command::Check(args) => print(out, check::check(&args)?),
         Command::Rsm { command } => rsm::rsm(&command, out),
-        Command::Calibrate(args) => calibrate::calibrate(&args, out),
+        Command::Calibrate(args) => print(out, calibrate::calibrate(&args)?),
         Command::Synth(args) => print(out, synth::synth(&args)?),
         Command::Report(args) => print(out, project_report::report(&args)?),
         Command::Diagnose(args) => diagnose::diagnose(&args, out),

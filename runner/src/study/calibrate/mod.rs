@@ -254,7 +254,14 @@ impl<'a> Setup<'a> {
 
 /// `tilth calibrate`: with `--joint`, [`super::calibrate_joint::joint`]; otherwise the
 /// per-condition steps of the module's documentation, in order.
-pub fn calibrate(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
+pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
+    let mut text = Vec::new();
+    calibrate_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`calibrate`], writing its summary to `out`.
+fn calibrate_into(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
     if args.joint && args.per_test {
         bail!(
             "--per-test gives one test its own values; --joint shares one value across tests: choose one"
