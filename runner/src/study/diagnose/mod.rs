@@ -511,7 +511,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         .chain(inputs.probes.iter().map(|(k, _)| format!("{HELD}{k}")))
         .collect();
     let sims = runs::simulate_variants(args, &set, &inputs.rows, &variants)?;
-    let (used, dropped) = runs::usable_rows(args, &inputs.rows, &sims)?;
+    let runs::Usable { used, dropped } = runs::usable_rows(args, &inputs.rows, &sims)?;
     let fd = Differences {
         variants: &variants,
         sims: &sims,

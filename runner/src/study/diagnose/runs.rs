@@ -169,14 +169,22 @@ pub(super) fn simulate_variants(
     })
 }
 
-/// The rows with a value in every variant and a standard error, as (index in `rows`,
-/// standard error), and why each other row was dropped. The standard error is
+/// The rows a diagnosis uses and those it drops.
+pub(super) struct Usable {
+    /// The rows with a value in every variant and a standard error, as (index in `rows`,
+    /// standard error).
+    pub used: Vec<(usize, f64)>,
+    /// Why each other row was dropped.
+    pub dropped: Vec<String>,
+}
+
+/// Sorts the rows into used and dropped. The standard error is
 /// sqrt(uncertainty^2 + scatter^2 / replicates), the scatter that of "base".
 pub(super) fn usable_rows(
     args: &DiagnoseArgs,
     rows: &[Measurement],
     sims: &Simulations,
-) -> Result<(Vec<(usize, f64)>, Vec<String>)> {
+) -> Result<Usable> {
     let mut used = vec![];
     let mut dropped = vec![];
     for (i, m) in rows.iter().enumerate() {
@@ -202,5 +210,5 @@ pub(super) fn usable_rows(
             dropped.join("; ")
         );
     }
-    Ok((used, dropped))
+    Ok(Usable { used, dropped })
 }
