@@ -15,26 +15,29 @@
 //! `DIR/diagnosis.md`, the ranking in words.
 
 use super::calibrate::{Param, parse_param};
-use super::compare::{LabRunArgs, Simulate, mean_sd, prefetch, simulate, std_error};
+use super::compare::LabRunArgs;
 use super::measurements::{Measurement, check_against_model, read_measurements};
-use super::model_edit::{add_to, switch_on, values_of, variant};
+use super::model_edit::values_of;
 use crate::lab::model::Model;
-use crate::sweep::execute;
 use anyhow::{Result, bail};
 use clap::Args;
-use nalgebra::DMatrix;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
-use tilth_tools::diagnose::{Candidate, JacobianNoise, Score, score_tests};
+use tilth_tools::diagnose::verdict::Verdict;
+use tilth_tools::diagnose::{Score, score_tests};
 
 pub mod file;
 mod fit_first;
 mod refit;
 mod report;
+mod runs;
+mod sensitivity;
 
-use fit_first::{fit_first, fit_summary};
+use fit_first::{FitFirst, fit_first, fit_summary};
+use runs::Simulations;
+use sensitivity::{Differences, Standardised};
 
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -189,8 +192,8 @@ fn check_candidates(names: &[String], model: &Model, path: &std::path::Path) -> 
     Ok(())
 }
 
-pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
-    let set = args.lab.set.parse()?;
+/// The options' ranges, checked before anything is read.
+fn check_args(args: &DiagnoseArgs) -> Result<()> {
     if args.replicates < 2 {
         bail!(
             "--replicates {} is out of range: allowed 2 or more (the noise of every finite difference is estimated from the replicates; without it any candidate could look significant)",
@@ -209,6 +212,29 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             args.param_step
         );
     }
+    Ok(())
+}
+
+/// What a diagnosis starts from, read and checked before any variant is written.
+struct Inputs {
+    /// The model the candidates are scored at: the one given, or with `--fit-first` the
+    /// fitted one.
+    model: Model,
+    /// That model's file, as text.
+    text: String,
+    /// With `--fit-first`, the fitted model's path.
+    fitted: Option<PathBuf>,
+    /// The measurements of the tests asked for.
+    rows: Vec<Measurement>,
+    params: Vec<Param>,
+    /// The candidates asked for (without the probes).
+    names: Vec<String>,
+    probes: Vec<(String, f64)>,
+}
+
+/// Reads the model, the measurements, the free parameters, the candidates and the probes,
+/// and with `--fit-first` fits the free parameters (which runs simulations).
+fn read_inputs(args: &DiagnoseArgs) -> Result<Inputs> {
     let model_path = std::path::absolute(&args.model)?;
     let model = Model::load(&model_path)?;
     let text = std::fs::read_to_string(&model_path)?;
@@ -246,210 +272,39 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         ),
         None => (model, text, None),
     };
+    Ok(Inputs {
+        model,
+        text,
+        fitted,
+        rows,
+        params,
+        names,
+        probes,
+    })
+}
 
-    // The variants, written and checked before any run.
-    let models_dir = args.out.join("models");
-    std::fs::create_dir_all(&models_dir)?;
-    // "base" (seeds 1..R) gives the residuals; "base-fd" (seeds R+1..2R) is the other end
-    // of every finite difference, so that the sensitivities' noise is independent of the
-    // residuals' (sharing runs would correlate them and fake a signal for every candidate).
-    let base = variant(&model, &text, &models_dir, "base", |_| Ok(()))?;
-    let mut variants: Vec<(String, PathBuf, f64)> = vec![
-        ("base".into(), base.clone(), 1.0),
-        ("base-fd".into(), base, 1.0),
-    ];
-    for p in &params {
-        let h = args.param_step * (p.high - p.low);
-        let name = format!("param-{}.{}", p.pair, p.key);
-        let path = variant(&model, &text, &models_dir, &name, |d| {
-            add_to(d, &format!("{}.{}", p.pair, p.key), h)
-        })?;
-        variants.push((name, path, h));
-    }
-    for n in &names {
-        let step = model.file.candidates[n].step;
-        let name = format!("candidate-{n}");
-        let path = variant(&model, &text, &models_dir, &name, |d| {
-            switch_on(d, &model, n, step)
-        })?;
-        variants.push((name, path, step));
-    }
-    for (key, step) in &probes {
-        let name = format!("probe-{key}");
-        let path = variant(&model, &text, &models_dir, &name, |d| add_to(d, key, *step))?;
-        variants.push((name, path, *step));
-    }
-    // The candidates' columns, then the probes'.
-    let names: Vec<String> = names
-        .into_iter()
-        .chain(probes.iter().map(|(k, _)| format!("{HELD}{k}")))
-        .collect();
-
-    let stop = execute::stop_on_signals()?;
-    let outs: Vec<std::path::PathBuf> = variants
-        .iter()
-        .map(|(name, _, _)| args.out.join("runs").join(name))
-        .collect();
-    // With --slurm every variant's runs go into one job array.
-    let hows: Vec<Simulate> = variants
-        .iter()
-        .zip(&outs)
-        .enumerate()
-        .map(|(k, ((_, path, _), out))| Simulate {
-            model: path,
-            data: &args.data,
-            out,
-            replicates: args.replicates,
-            first_seed: if k == 0 {
-                1
-            } else {
-                1 + args.replicates as u64
-            },
-            lab: &args.lab,
-            set: &set,
-        })
-        .collect();
-    prefetch(&rows, &hows)?;
-    let mut means: Vec<Vec<Option<f64>>> = vec![];
-    let mut values: Vec<Vec<Vec<f64>>> = vec![];
-    // The first reason a row has no value in some variant.
-    let mut problems: BTreeMap<usize, String> = BTreeMap::new();
-    let mut base_scatter: Vec<Option<f64>> = vec![];
-    for (k, (name, _, _)) in variants.iter().enumerate() {
-        if !args.lab.quiet {
-            eprintln!("variant {} of {}: {name}", k + 1, variants.len());
-        }
-        let sims = simulate(&rows, &hows[k], &stop)?;
-        if k == 0 {
-            base_scatter = sims.iter().map(|(v, _)| mean_sd(v).1).collect();
-        }
-        // Only replicates that finished in every variant would be fairer; a failed run
-        // is reported and its row dropped below.
-        means.push(
-            sims.iter()
-                .map(|(v, _)| {
-                    if v.len() == args.replicates {
-                        Some(mean_sd(v).0)
-                    } else {
-                        None
-                    }
-                })
-                .collect(),
-        );
-        for (i, (_, why)) in sims.iter().enumerate() {
-            if let Some(first) = why.first() {
-                problems
-                    .entry(i)
-                    .or_insert_with(|| format!("{name}, {first}"));
-            }
-        }
-        values.push(sims.into_iter().map(|(v, _)| v).collect());
-    }
-
-    // Rows usable in every variant, with a standard error.
-    let mut used = vec![];
-    let mut dropped = vec![];
-    for (i, m) in rows.iter().enumerate() {
-        let se = std_error(base_scatter[i], args.replicates, m.uncertainty);
-        if means.iter().any(|v| v[i].is_none()) {
-            dropped.push(format!(
-                "row {}: a run failed ({})",
-                m.row,
-                problems.get(&i).map_or("no value", String::as_str)
-            ));
-        } else if se.is_none() {
-            dropped.push(format!(
-                "row {}: no uncertainty and no replicate scatter",
-                m.row
-            ));
-        } else {
-            used.push((i, se.unwrap()));
-        }
-    }
-    if used.is_empty() {
-        bail!(
-            "no row is usable: {} (give uncertainties or --replicates 2 or more)",
-            dropped.join("; ")
-        );
-    }
-    let m = used.len();
-    let residual: Vec<f64> = used
-        .iter()
-        .map(|&(i, s)| (rows[i].value - means[0][i].unwrap()) / s)
-        .collect();
-    // Finite differences against base-fd (variant 1), paired by seed.
-    let sens = |v: usize| -> Vec<f64> {
-        let h = variants[v].2;
-        used.iter()
-            .map(|&(i, s)| (means[v][i].unwrap() - means[1][i].unwrap()) / h / s)
-            .collect()
-    };
-    // Each row's slopes seed by seed (all are differences against base-fd): their scatter
-    // is the noise of the finite differences.
-    let seed_slopes = |v: usize| -> Vec<Vec<f64>> {
-        let h = variants[v].2;
-        used.iter()
-            .map(|&(i, s)| {
-                (values[v][i].iter().zip(&values[1][i]))
-                    .map(|(a, b)| (a - b) / h / s)
-                    .collect()
-            })
-            .collect()
-    };
-    // Variance of each row's mean difference.
-    let sens_var = |v: usize| -> Vec<f64> {
-        seed_slopes(v)
-            .iter()
-            .map(|d| mean_sd(d).1.map_or(0.0, |sd| sd * sd / d.len() as f64))
-            .collect()
-    };
-    // The free parameters' slopes' covariances, and the candidates' with them.
-    let jacobian_noise = JacobianNoise::from_seeds(
-        &(0..params.len())
-            .map(|c| seed_slopes(2 + c))
-            .collect::<Vec<_>>(),
-        &(0..names.len())
-            .map(|k| seed_slopes(2 + params.len() + k))
-            .collect::<Vec<_>>(),
-    );
-    // Column by column (each sensitivity once, not once per element).
-    let columns: Vec<f64> = (0..params.len()).flat_map(|c| sens(2 + c)).collect();
-    let x = DMatrix::from_column_slice(m, params.len(), &columns);
-    let candidates: Vec<Candidate> = names
-        .iter()
-        .enumerate()
-        .map(|(k, n)| Candidate {
-            name: n.clone(),
-            sensitivity: sens(2 + params.len() + k),
-            sensitivity_var: sens_var(2 + params.len() + k),
-        })
-        .collect();
-    let fit_first = match &fitted {
-        Some(_) => Some(fit_summary(&args.out)?),
-        None => None,
-    };
-    let scores = score_tests(&residual, &x, &jacobian_noise, &candidates);
-    let verdict = tilth_tools::diagnose::verdict::verdict(
-        &residual,
-        &x,
-        &jacobian_noise,
-        &candidates,
-        &scores,
-        args.alpha,
-    );
-    let absorbed = tilth_tools::diagnose::absorbed(&residual, &x);
-    let shift = tilth_tools::diagnose::recalibration(&residual, &x);
-    let doc: toml_edit::DocumentMut = text.parse()?;
-    let recalibrated: Vec<Recalibrated> = params
+/// The linear recalibration of each free parameter: its values shifted by the
+/// least-squares `shift`, whether they stay in its range, and whether its effect stands
+/// above its noise (sum of x^2 over its sum of variances).
+fn recalibrate(
+    params: &[Param],
+    doc: &toml_edit::DocumentMut,
+    shift: &[f64],
+    fd: &Differences,
+) -> Result<Vec<Recalibrated>> {
+    params
         .iter()
         .enumerate()
         .map(|(c, p)| {
             let path = format!("{}.{}", p.pair, p.key);
-            let now = values_of(&doc, &path)?;
+            let now = values_of(doc, &path)?;
             let after: Vec<f64> = now.iter().map(|v| v + shift[c]).collect();
             Ok(Recalibrated {
                 within_range: after.iter().all(|v| (p.low..=p.high).contains(v)),
-                measurable: tilth_tools::diagnose::measurable(&sens(2 + c), &sens_var(2 + c)),
+                measurable: tilth_tools::diagnose::measurable(
+                    &fd.sensitivity(2 + c),
+                    &fd.variance(2 + c),
+                ),
                 parameter: path,
                 now,
                 shift: shift[c],
@@ -457,23 +312,35 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                 range: [p.low, p.high],
             })
         })
-        .collect::<Result<_>>()?;
+        .collect()
+}
 
-    // Per observable RMSE after recalibration, and after adding each candidate.
-    let rmse_by_obs = |z: &[f64]| -> BTreeMap<String, f64> {
-        let mut acc: BTreeMap<String, (f64, usize)> = BTreeMap::new();
-        for (r, &(i, s)) in used.iter().enumerate() {
-            let e = acc.entry(rows[i].observable.clone()).or_default();
-            e.0 += (z[r] * s).powi(2);
-            e.1 += 1;
-        }
-        acc.into_iter()
-            .map(|(k, (ss, n))| (k, (ss / n as f64).sqrt()))
-            .collect()
-    };
-    let before = rmse_by_obs(&absorbed);
-    let now = rmse_by_obs(&residual);
-    let diagnosed: Vec<Diagnosed> = scores
+/// Each observable's RMSE, in its unit, of the standardised residuals `z` over the used
+/// rows (index, standard error se): sqrt(sum of (z * se)^2 / n) over its n rows.
+fn rmse_by_obs(rows: &[Measurement], used: &[(usize, f64)], z: &[f64]) -> BTreeMap<String, f64> {
+    let mut acc: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    for (r, &(i, s)) in used.iter().enumerate() {
+        let e = acc.entry(rows[i].observable.clone()).or_default();
+        e.0 += (z[r] * s).powi(2);
+        e.1 += 1;
+    }
+    acc.into_iter()
+        .map(|(k, (ss, n))| (k, (ss / n as f64).sqrt()))
+        .collect()
+}
+
+/// Each score as written: significant when identifiable with p < `--alpha`, and the RMSE
+/// drop per observable it predicts, `before` (after recalibration) less the RMSE of the
+/// absorbed residual less the candidate's fitted change.
+fn to_diagnosed(
+    args: &DiagnoseArgs,
+    inputs: &Inputs,
+    used: &[(usize, f64)],
+    scores: Vec<Score>,
+    absorbed: &[f64],
+    before: &BTreeMap<String, f64>,
+) -> Vec<Diagnosed> {
+    scores
         .into_iter()
         .map(|s| {
             let after_z: Vec<f64> = absorbed
@@ -481,7 +348,7 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                 .zip(&s.fitted_change)
                 .map(|(a, f)| a - f)
                 .collect();
-            let after = rmse_by_obs(&after_z);
+            let after = rmse_by_obs(&inputs.rows, used, &after_z);
             Diagnosed {
                 significant: s.identifiable && s.p_value < args.alpha,
                 predicted_rmse_drop: before
@@ -490,29 +357,75 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
                     .collect(),
                 description: match s.name.strip_prefix(HELD) {
                     Some(key) => Some(format!("the model's {key}, held fixed")),
-                    None => model.file.candidates[&s.name].description.clone(),
+                    None => inputs.model.file.candidates[&s.name].description.clone(),
                 },
                 held_parameter: s.name.starts_with(HELD),
                 score: s,
             }
         })
-        .collect();
-    let refitted = {
-        let step_of = |d: &Diagnosed| -> Result<(f64, Vec<f64>)> {
-            match d.score.name.strip_prefix(HELD) {
-                Some(key) => {
-                    let step = probes.iter().find(|(k, _)| k == key).map_or(0.0, |p| p.1);
-                    Ok((step, values_of(&doc, key)?))
-                }
-                None => Ok((model.file.candidates[&d.score.name].step, vec![])),
+        .collect()
+}
+
+/// Fits the contenders on simulations (see [`refit::refit`]), each at its step: a
+/// candidate's from the model file, a probe's from `--probe` with the model's values of it.
+fn refit_contenders(
+    args: &DiagnoseArgs,
+    inputs: &Inputs,
+    doc: &toml_edit::DocumentMut,
+    verdict: &Verdict,
+    diagnosed: &[Diagnosed],
+) -> Result<Option<(Verdict, refit::Refits)>> {
+    let step_of = |d: &Diagnosed| -> Result<(f64, Vec<f64>)> {
+        match d.score.name.strip_prefix(HELD) {
+            Some(key) => {
+                let step = inputs
+                    .probes
+                    .iter()
+                    .find(|(k, _)| k == key)
+                    .map_or(0.0, |p| p.1);
+                Ok((step, values_of(doc, key)?))
             }
-        };
-        refit::refit(args, &rows, &verdict, &diagnosed, &step_of)?
+            None => Ok((inputs.model.file.candidates[&d.score.name].step, vec![])),
+        }
     };
-    let (verdict, linear_verdict, refits) = match refitted {
-        Some((v, refits)) => (v, Some(verdict), Some(refits)),
-        None => (verdict, None, None),
-    };
+    refit::refit(args, &inputs.rows, verdict, diagnosed, &step_of)
+}
+
+/// What a diagnosis found, as `diagnosis.json` and `diagnosis.md` give it.
+struct Outcome {
+    fit_first: Option<FitFirst>,
+    /// RMSE per observable of the model as it is.
+    now: BTreeMap<String, f64>,
+    /// RMSE per observable after the linear recalibration of the free parameters.
+    before: BTreeMap<String, f64>,
+    recalibrated: Vec<Recalibrated>,
+    diagnosed: Vec<Diagnosed>,
+    /// The refit's verdict, or the linear one with `--no-refit` or without a refit.
+    verdict: Verdict,
+    /// The linear verdict, when the refit's replaced it.
+    linear_verdict: Option<Verdict>,
+    refits: Option<refit::Refits>,
+    dropped: Vec<String>,
+}
+
+/// Writes `DIR/diagnosis.json`: the settings, the outcome, and the standardised columns and
+/// rows that `tilth next` reads.
+fn write_json(
+    args: &DiagnoseArgs,
+    inputs: &Inputs,
+    used: &[(usize, f64)],
+    sims: &Simulations,
+    lin: &Standardised,
+    o: &Outcome,
+) -> Result<()> {
+    let Inputs {
+        params,
+        probes,
+        rows,
+        fitted,
+        ..
+    } = inputs;
+    let means = &sims.means;
     let json = serde_json::json!({
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
@@ -523,21 +436,21 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         "free_parameters": params,
         "param_step": args.param_step,
         "fitted_model": fitted.as_ref().map(|p| p.display().to_string()),
-        "fit_first": fit_first,
-        "rows_used": m,
-        "rows_dropped": dropped,
-        "rmse_now": now,
-        "rmse_after_recalibration": before,
-        "recalibration": recalibrated,
-        "candidates": diagnosed,
+        "fit_first": o.fit_first,
+        "rows_used": used.len(),
+        "rows_dropped": o.dropped,
+        "rmse_now": o.now,
+        "rmse_after_recalibration": o.before,
+        "recalibration": o.recalibrated,
+        "candidates": o.diagnosed,
         "probes": probes.iter().map(|(k, h)| serde_json::json!({"parameter": k, "step": h})).collect::<Vec<_>>(),
-        "verdict": verdict,
-        "linear_verdict": linear_verdict,
-        "refit": refits,
+        "verdict": o.verdict,
+        "linear_verdict": o.linear_verdict,
+        "refit": o.refits,
         // Standardised, one number per entry of "rows": what `tilth next` extends.
         "columns": {
-            "free": params.iter().enumerate().map(|(c, p)| (format!("{}.{}", p.pair, p.key), x.column(c).iter().copied().collect::<Vec<_>>())).collect::<BTreeMap<_, _>>(),
-            "candidates": candidates.iter().map(|c| (c.name.clone(), serde_json::json!({"sensitivity": c.sensitivity, "variance": c.sensitivity_var}))).collect::<BTreeMap<_, _>>(),
+            "free": params.iter().enumerate().map(|(c, p)| (format!("{}.{}", p.pair, p.key), lin.x.column(c).iter().copied().collect::<Vec<_>>())).collect::<BTreeMap<_, _>>(),
+            "candidates": lin.candidates.iter().map(|c| (c.name.clone(), serde_json::json!({"sensitivity": c.sensitivity, "variance": c.sensitivity_var}))).collect::<BTreeMap<_, _>>(),
         },
         "rows": used.iter().enumerate().map(|(r, &(i, se))| serde_json::json!({
             "row": rows[i].row,
@@ -547,25 +460,35 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
             "measured": rows[i].value,
             "simulated": means[0][i],
             "standard_error": se,
-            "residual_z": residual[r],
+            "residual_z": lin.residual[r],
         })).collect::<Vec<_>>(),
     });
     std::fs::write(
         args.out.join("diagnosis.json"),
         serde_json::to_vec_pretty(&json)?,
     )?;
+    Ok(())
+}
+
+/// Writes `DIR/diagnosis.md` and prints it.
+fn write_report(
+    args: &DiagnoseArgs,
+    params: &[Param],
+    o: &Outcome,
+    out: &mut dyn Write,
+) -> Result<()> {
     let md = report::report(
         args,
         &report::Findings {
-            params: &params,
-            diagnosed: &diagnosed,
-            now: &now,
-            before: &before,
-            recalibrated: &recalibrated,
-            dropped: &dropped,
-            verdict: &verdict,
-            fit_first: fit_first.as_ref(),
-            refits: refits.as_ref(),
+            params,
+            diagnosed: &o.diagnosed,
+            now: &o.now,
+            before: &o.before,
+            recalibrated: &o.recalibrated,
+            dropped: &o.dropped,
+            verdict: &o.verdict,
+            fit_first: o.fit_first.as_ref(),
+            refits: o.refits.as_ref(),
         },
     );
     std::fs::write(args.out.join("diagnosis.md"), &md)?;
@@ -576,4 +499,62 @@ pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         args.out.display()
     )?;
     Ok(())
+}
+
+pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
+    let set = args.lab.set.parse()?;
+    check_args(args)?;
+    let inputs = read_inputs(args)?;
+    let variants = runs::write_variants(args, &inputs)?;
+    // The candidates' columns, then the probes'.
+    let names: Vec<String> = (inputs.names.iter().cloned())
+        .chain(inputs.probes.iter().map(|(k, _)| format!("{HELD}{k}")))
+        .collect();
+    let sims = runs::simulate_variants(args, &set, &inputs.rows, &variants)?;
+    let runs::Usable { used, dropped } = runs::usable_rows(args, &inputs.rows, &sims)?;
+    let fd = Differences {
+        variants: &variants,
+        sims: &sims,
+        used: &used,
+    };
+    let lin = sensitivity::standardise(&inputs.rows, &fd, inputs.params.len(), &names);
+    let fit_first = match &inputs.fitted {
+        Some(_) => Some(fit_summary(&args.out)?),
+        None => None,
+    };
+    let Standardised {
+        residual,
+        x,
+        noise,
+        candidates,
+    } = &lin;
+    let scores = score_tests(residual, x, noise, candidates);
+    let verdict = tilth_tools::diagnose::verdict::verdict(
+        residual, x, noise, candidates, &scores, args.alpha,
+    );
+    let absorbed = tilth_tools::diagnose::absorbed(residual, x);
+    let shift = tilth_tools::diagnose::recalibration(residual, x);
+    let doc: toml_edit::DocumentMut = inputs.text.parse()?;
+    let recalibrated = recalibrate(&inputs.params, &doc, &shift, &fd)?;
+    let before = rmse_by_obs(&inputs.rows, &used, &absorbed);
+    let now = rmse_by_obs(&inputs.rows, &used, residual);
+    let diagnosed = to_diagnosed(args, &inputs, &used, scores, &absorbed, &before);
+    let refitted = refit_contenders(args, &inputs, &doc, &verdict, &diagnosed)?;
+    let (verdict, linear_verdict, refits) = match refitted {
+        Some((v, refits)) => (v, Some(verdict), Some(refits)),
+        None => (verdict, None, None),
+    };
+    let outcome = Outcome {
+        fit_first,
+        now,
+        before,
+        recalibrated,
+        diagnosed,
+        verdict,
+        linear_verdict,
+        refits,
+        dropped,
+    };
+    write_json(args, &inputs, &used, &sims, &lin, &outcome)?;
+    write_report(args, &inputs.params, &outcome, out)
 }
