@@ -84,9 +84,9 @@ pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
         Command::Calibrate(args) => print(out, calibrate::calibrate(&args)?),
         Command::Synth(args) => print(out, synth::synth(&args)?),
         Command::Report(args) => print(out, project_report::report(&args)?),
-        Command::Diagnose(args) => diagnose::diagnose(&args, out),
+        Command::Diagnose(args) => print(out, diagnose::diagnose(&args)?),
         Command::Next(args) => print(out, next::next(&args)?),
-        Command::Fit(args) => fit::fit(&args, out),
+        Command::Fit(args) => print(out, fit::fit(&args)?),
     }
 }
 

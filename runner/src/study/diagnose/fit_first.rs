@@ -33,7 +33,7 @@ pub(super) fn fit_first(args: &DiagnoseArgs, rows: &[Measurement]) -> Result<Opt
         out: dir.clone(),
         lab: args.lab.clone(),
     };
-    crate::study::fit::fit(&fit, &mut std::io::sink())?;
+    crate::study::fit::fit(&fit)?;
     Ok(Some(std::path::absolute(dir.join("model.toml"))?))
 }
 

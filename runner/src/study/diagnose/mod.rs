@@ -501,7 +501,14 @@ fn write_report(
     Ok(())
 }
 
-pub fn diagnose(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
+pub fn diagnose(args: &DiagnoseArgs) -> Result<String> {
+    let mut text = Vec::new();
+    diagnose_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`diagnose`], writing its summary to `out`.
+fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     check_args(args)?;
     let inputs = read_inputs(args)?;

@@ -177,7 +177,7 @@ fn fit_into(
         out: dir.to_path_buf(),
         lab: args.lab.clone(),
     };
-    crate::study::fit::fit(&fit, &mut std::io::sink())?;
+    crate::study::fit::fit(&fit)?;
     read_fit(dir)
 }
 

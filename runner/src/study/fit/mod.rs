@@ -93,7 +93,14 @@ pub struct FitArgs {
 
 /// `tilth fit`: checks the inputs, fits the free parameters by Levenberg-Marquardt on
 /// simulations, and writes the fitted model and the report (see the module docs).
-pub fn fit(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
+pub fn fit(args: &FitArgs) -> Result<String> {
+    let mut text = Vec::new();
+    fit_into(args, &mut text)?;
+    Ok(String::from_utf8(text)?)
+}
+
+/// [`fit`], writing its summary to `out`.
+fn fit_into(args: &FitArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     check_counts(args)?;
     let model_path = std::path::absolute(&args.model)?;
