@@ -11,15 +11,16 @@
 //! that says which of those failed.
 
 use super::discharge::Discharge;
-use super::experiment::{Built, Common, rayleigh_time, scene::*, soil_density};
+use super::experiment::{Built, Common, particle_diameter, rayleigh_time, soil_density};
 use super::observe::{self, Tray};
 use super::protocol::{Control, Protocol};
+use super::scene::{self, UP, on_axis};
 use super::sizes::SizeMix;
+use crate::config::{FactorySection, RegionSection, ShapeSection, SimulationSection, WallSection};
 use anyhow::{Result, bail};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use tilth_kernel::sim::Simulation;
-use toml::Value;
 
 /// The funnel's default Verlet skin, in particle diameters. Grains leave the outlet at up
 /// to about 2 m/s, so with the kernel's usual 0.2 the list was rebuilt every six steps of a
@@ -138,11 +139,45 @@ fn positive(key: &str, v: f64, unit: &str) -> Result<f64> {
 
 /// The scene and protocol of a repose test.
 pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
-    let d = positive(
-        "diameter",
-        super::experiment::particle_diameter(c, p.diameter),
-        "m",
-    )?;
+    let Checked { d, mass, outlet } = check(c, p)?;
+    let rho = soil_density(c.model)?;
+    let mix = SizeMix::of(c.model, c.at(), d)?;
+    let count = mix.count(mass * 1e-3 / rho);
+    if count < 1 {
+        bail!("repose.mass_g = {mass} g is less than one particle");
+    }
+    let dt = match c.sim.dt {
+        Some(dt) => dt,
+        None => c.sim.dt_fraction * rayleigh_time(c.model, mix.min_diameter())?,
+    };
+    let parts = c.model.scene_parts(c.at(), false)?;
+    let rig = Rig::new(p, outlet, d);
+    let scene = scene::scene(
+        parts,
+        rig.simulation(c, p, dt, &mix),
+        rig.walls(p),
+        vec![rig.factory(p, count, &mix, d)],
+    );
+    Ok(Built {
+        scene: scene::to_value(&scene)?,
+        bonded_dt: None,
+        protocol: Box::new(ReposeProtocol::new(p, &rig, count, outlet, d, mass)),
+    })
+}
+
+/// The values of a repose test that follow from the parameters and the preset.
+struct Checked {
+    /// Particle diameter, m.
+    d: f64,
+    /// Soil poured, g.
+    mass: f64,
+    /// Funnel outlet diameter, m.
+    outlet: f64,
+}
+
+/// Refuses parameters out of range and a funnel the particles would jam.
+fn check(c: &Common, p: &ReposeParams) -> Result<Checked> {
+    let d = positive("diameter", particle_diameter(c, p.diameter), "m")?;
     let mass = positive(
         "mass_g",
         p.mass_g.unwrap_or(if c.coarse { 40.0 } else { 200.0 }),
@@ -189,154 +224,104 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
     if p.funnel_inlet_diameter <= outlet {
         bail!("repose.funnel_inlet_diameter must be larger than funnel_outlet_diameter");
     }
-    let rho = soil_density(c.model)?;
-    let mix = SizeMix::of(c.model, c.at(), d)?;
-    let count = mix.count(mass * 1e-3 / rho);
-    if count < 1 {
-        bail!("repose.mass_g = {mass} g is less than one particle");
-    }
-    let dt = match c.sim.dt {
-        Some(dt) => dt,
-        None => c.sim.dt_fraction * rayleigh_time(c.model, mix.min_diameter())?,
-    };
-    let (materials, contact, pairs) = c.model.scene_parts(c.at(), false)?;
-    let tray_r = 0.5 * p.tray_diameter;
-    // The tray's top; its side wall reaches down to the floor (tray and stand, one cylinder).
-    let z_tray = p.stand_height + p.tray_height;
-    let z_out = z_tray + p.drop_height;
-    let (r_out, r_in) = (0.5 * outlet, 0.5 * p.funnel_inlet_diameter);
-    let z_top = z_out + p.funnel_height;
-    // Particles appear in the funnel's upper 40 %, inside its wall with one diameter to spare.
-    let z_fill = z_out + 0.6 * p.funnel_height;
-    let r_fill = r_out + (r_in - r_out) * 0.6 - d;
-    let half = r_in.max(0.15) + 0.05;
-    let scene = t(&[
-        ("format_version", Value::Integer(1)),
-        (
-            "simulation",
-            t(&[
-                ("dt", f(dt)),
-                (
-                    "skin",
-                    f(c.sim.skin_fraction.unwrap_or(SKIN_FRACTION) * mix.min_diameter()),
-                ),
-                ("duration", f(p.max_time)),
-                ("seed", Value::Integer(c.sim.seed as i64)),
-                ("threads", Value::Integer(c.sim.threads as i64)),
-                (
-                    "domain",
-                    t(&[
-                        ("min", v3([-half, -half, -0.005])),
-                        ("max", v3([half, half, z_top + 0.05])),
-                    ]),
-                ),
-            ]),
-        ),
-        ("materials", materials),
-        ("contact", contact),
-        ("pairs", pairs),
-        (
-            "walls",
-            Value::Array(vec![
-                t(&[
-                    ("name", s("funnel")),
-                    ("type", s("cone")),
-                    ("base", v3([0.0, 0.0, z_out])),
-                    ("axis", v3([0.0, 0.0, 1.0])),
-                    ("radius_base", f(r_out)),
-                    ("radius_top", f(r_in)),
-                    ("length", f(p.funnel_height)),
-                    ("material", s("steel")),
-                ]),
-                t(&[
-                    ("name", s("tray")),
-                    ("type", s("disc")),
-                    ("centre", v3([0.0, 0.0, z_tray])),
-                    ("axis", v3([0.0, 0.0, 1.0])),
-                    ("radius", f(tray_r)),
-                    ("material", s("steel")),
-                ]),
-                t(&[
-                    ("name", s("tray_side")),
-                    ("type", s("cylinder")),
-                    ("base", v3([0.0, 0.0, 0.0])),
-                    ("axis", v3([0.0, 0.0, 1.0])),
-                    ("radius", f(tray_r)),
-                    ("length", f(z_tray)),
-                    ("material", s("steel")),
-                ]),
-                // Keeps what rolls off the tray on the floor, and the rare grain thrown out
-                // of the stream (seen with a fine fraction) inside the domain, as high as it
-                // goes.
-                t(&[
-                    ("name", s("fence")),
-                    ("type", s("cylinder")),
-                    ("base", v3([0.0, 0.0, 0.0])),
-                    ("axis", v3([0.0, 0.0, 1.0])),
-                    ("radius", f(half - 0.02)),
-                    ("length", f(z_top + 0.04)),
-                    ("material", s("steel")),
-                ]),
-                t(&[
-                    ("name", s("floor")),
-                    ("type", s("plane")),
-                    ("point", v3([0.0, 0.0, 0.0])),
-                    ("normal", v3([0.0, 0.0, 1.0])),
-                    ("material", s("steel")),
-                ]),
-            ]),
-        ),
-        (
-            "factories",
-            Value::Array(vec![t(&[
-                (
-                    "region",
-                    t(&[
-                        ("type", s("cylinder")),
-                        ("base", v3([0.0, 0.0, z_fill])),
-                        ("radius", f(r_fill)),
-                        ("height", f(z_top - z_fill - d)),
-                    ]),
-                ),
-                ("material", s("soil")),
-                ("count", Value::Integer(count)),
-                ("rate", f(p.rate)),
-                ("velocity", v3([0.0, 0.0, -0.2])),
-                ("basis", s("mass")),
-                ("sizes", mix.sizes()),
-            ])]),
-        ),
-    ]);
-    let tray = Tray {
-        centre: [0.0, 0.0, z_tray],
-        radius: tray_r,
-        ceiling: z_out,
-    };
-    Ok(Built {
-        scene,
-        bonded_dt: None,
-        protocol: Box::new(ReposeProtocol {
-            p: p.clone(),
-            tray,
-            count: count as usize,
-            fill_time: count as f64 / p.rate,
-            z_out,
-            outlet,
-            angles: vec![],
-            mean_speeds: vec![],
-            settled_at: None,
-            check_every: 0.02,
-            next_check: 0.0,
-            diameter: d,
-            mass_g: mass,
-            discharge: Discharge::default(),
-        }),
-    })
+    Ok(Checked { d, mass, outlet })
 }
 
-/// The "still" path to rest: the mean speed below the outlet under this fraction of
-/// `rest_speed` for `rest_time` (see `ReposeProtocol::at_rest`).
-const STILL_FRACTION: f64 = 0.2;
+/// The rig's heights (above the floor) and radii, m.
+struct Rig {
+    tray_radius: f64,
+    /// The tray's top; its side wall reaches down to the floor (tray and stand, one
+    /// cylinder).
+    z_tray: f64,
+    /// The funnel's outlet.
+    z_out: f64,
+    /// The funnel's radius at its outlet and at its inlet.
+    r_out: f64,
+    r_in: f64,
+    /// The funnel's inlet.
+    z_top: f64,
+    /// The fill region's bottom and radius.
+    z_fill: f64,
+    r_fill: f64,
+    /// Half the domain's width; the fence stands inside it.
+    half: f64,
+}
+
+impl Rig {
+    /// The rig of `p` with a funnel outlet `outlet` m wide, for particles of diameter `d` m.
+    fn new(p: &ReposeParams, outlet: f64, d: f64) -> Rig {
+        let z_tray = p.stand_height + p.tray_height;
+        let z_out = z_tray + p.drop_height;
+        let (r_out, r_in) = (0.5 * outlet, 0.5 * p.funnel_inlet_diameter);
+        Rig {
+            tray_radius: 0.5 * p.tray_diameter,
+            z_tray,
+            z_out,
+            r_out,
+            r_in,
+            z_top: z_out + p.funnel_height,
+            // Particles appear in the funnel's upper 40 %, inside its wall with one diameter
+            // to spare.
+            z_fill: z_out + 0.6 * p.funnel_height,
+            r_fill: r_out + (r_in - r_out) * 0.6 - d,
+            half: r_in.max(0.15) + 0.05,
+        }
+    }
+
+    /// `[simulation]`: steps of `dt` s up to `max_time`, the skin in diameters of the
+    /// smallest grain of `mix` ([`SKIN_FRACTION`] unless the experiment sets it).
+    fn simulation(
+        &self,
+        c: &Common,
+        p: &ReposeParams,
+        dt: f64,
+        mix: &SizeMix,
+    ) -> SimulationSection {
+        let skin = c.sim.skin_fraction.unwrap_or(SKIN_FRACTION) * mix.min_diameter();
+        let domain = scene::domain(self.half, -0.005, self.z_top + 0.05);
+        scene::simulation(c, dt, p.max_time, skin, domain)
+    }
+
+    /// The funnel, the tray with its side, the fence and the floor.
+    fn walls(&self, p: &ReposeParams) -> Vec<WallSection> {
+        let funnel = ShapeSection::Cone {
+            base: on_axis(self.z_out),
+            axis: UP,
+            radius_base: self.r_out,
+            radius_top: self.r_in,
+            length: p.funnel_height,
+        };
+        vec![
+            scene::steel("funnel", funnel),
+            scene::disc("tray", self.z_tray, self.tray_radius),
+            scene::ring("tray_side", 0.0, self.z_tray, self.tray_radius),
+            // Keeps what rolls off the tray on the floor, and the rare grain thrown out of
+            // the stream (seen with a fine fraction) inside the domain, as high as it goes.
+            scene::ring("fence", 0.0, self.z_top + 0.04, self.half - 0.02),
+            scene::floor("floor"),
+        ]
+    }
+
+    /// The factory pouring `count` particles of `mix` (largest diameter `d`, m) into the
+    /// funnel at `p.rate`, falling at 0.2 m/s.
+    fn factory(&self, p: &ReposeParams, count: usize, mix: &SizeMix, d: f64) -> FactorySection {
+        let region = RegionSection::Cylinder {
+            base: on_axis(self.z_fill),
+            radius: self.r_fill,
+            height: self.z_top - self.z_fill - d,
+        };
+        scene::soil_factory(region, count, p.rate, [0.0, 0.0, -0.2], mix)
+    }
+
+    /// The tray the heap is measured on: particles above the funnel's outlet are not on it.
+    fn tray(&self) -> Tray {
+        Tray {
+            centre: on_axis(self.z_tray),
+            radius: self.tray_radius,
+            ceiling: self.z_out,
+        }
+    }
+}
 
 /// Runs a repose test to rest.
 pub struct ReposeProtocol {
@@ -365,6 +350,34 @@ pub struct ReposeProtocol {
 const DISCHARGE_SAMPLE: f64 = 1e-3;
 
 impl ReposeProtocol {
+    /// A test of `p` on `rig`, pouring `count` particles of diameter `diameter` m (`mass_g`
+    /// g in all) through an outlet `outlet` m wide.
+    fn new(
+        p: &ReposeParams,
+        rig: &Rig,
+        count: usize,
+        outlet: f64,
+        diameter: f64,
+        mass_g: f64,
+    ) -> ReposeProtocol {
+        ReposeProtocol {
+            p: p.clone(),
+            tray: rig.tray(),
+            count,
+            fill_time: count as f64 / p.rate,
+            z_out: rig.z_out,
+            outlet,
+            angles: vec![],
+            mean_speeds: vec![],
+            settled_at: None,
+            check_every: 0.02,
+            next_check: 0.0,
+            diameter,
+            mass_g,
+            discharge: Discharge::default(),
+        }
+    }
+
     /// The fraction of the poured mass below the outlet (by mass: with a fine fraction a
     /// count would weigh a fine grain as much as a coarse one).
     fn passed(&self, sim: &Simulation) -> f64 {
@@ -387,7 +400,107 @@ impl ReposeProtocol {
             .fold(0.0, |total, m| total + m)
             * 1e3
     }
+}
 
+impl Protocol for ReposeProtocol {
+    fn control(&mut self, sim: &mut Simulation) -> Result<Control> {
+        if sim.time + 1e-12 >= self.next_check {
+            let h = observe::heap(sim, self.tray);
+            self.angles.push((sim.time, h.cone_angle_deg));
+            if let Some(v) = self.mean_speed_below_outlet(sim) {
+                self.mean_speeds.push((sim.time, v));
+            }
+            self.next_check = sim.time + self.check_every;
+            if self.at_rest(sim) {
+                // At rest with most of the soil still in the funnel is a jam, not a heap.
+                self.check_jam(sim, true)?;
+                self.settled_at = Some(sim.time);
+                return Ok(Control::Done);
+            }
+            self.check_jam(sim, false)?;
+        }
+        if sim.time >= self.p.max_time - 0.5 * sim.dt {
+            return Ok(Control::Done);
+        }
+        let mut until = self.next_check;
+        if !self.discharge.done() {
+            self.discharge.sample(sim.time, self.passed(sim));
+            until = until.min(sim.time + DISCHARGE_SAMPLE);
+        }
+        let steps = ((until - sim.time) / sim.dt).ceil().max(1.0) as u64;
+        Ok(Control::Step(steps))
+    }
+
+    fn scalars(&self, sim: &Simulation) -> Vec<(String, f64)> {
+        let h = observe::heap(sim, self.tray);
+        vec![
+            ("heap_cone_angle_deg".into(), h.cone_angle_deg),
+            ("heap_height".into(), h.height_m),
+            ("particles_on_tray".into(), h.particles_on_tray as f64),
+        ]
+    }
+
+    fn units(&self) -> Vec<(String, String)> {
+        vec![
+            ("heap_cone_angle_deg".into(), "degree".into()),
+            ("heap_height".into(), "m".into()),
+            ("particles_on_tray".into(), "count".into()),
+        ]
+    }
+
+    fn metadata(&self) -> BTreeMap<String, String> {
+        [
+            ("type", "repose".to_string()),
+            ("tray_radius_m", self.tray.radius.to_string()),
+            ("tray_top_z_m", self.tray.centre[2].to_string()),
+            ("tray_centre_x_m", "0".into()),
+            ("tray_centre_y_m", "0".into()),
+            ("drop_height_m", self.p.drop_height.to_string()),
+            ("particle_diameter_m", self.diameter.to_string()),
+            ("mass_g", self.mass_g.to_string()),
+            ("photographs", self.p.photographs.to_string()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    }
+
+    fn phase(&self) -> String {
+        "pouring and settling".into()
+    }
+
+    fn progress(&self, sim: &Simulation) -> f64 {
+        (sim.time / self.p.max_time).min(1.0)
+    }
+
+    fn summary(&self, sim: &Simulation) -> serde_json::Value {
+        let h = observe::heap(sim, self.tray);
+        serde_json::json!({
+            "settled": self.settled_at.is_some(),
+            "settled_at_s": self.settled_at,
+            "heap_cone_angle_deg": h.cone_angle_deg,
+            "heap_height_m": h.height_m,
+            "particles_on_tray": h.particles_on_tray,
+            "tray_mass_g": h.mass_on_tray_kg * 1e3,
+            "funnel_flow_rate_g_s": self.discharge.rate_g_per_s(self.mass_g),
+            "particles": sim.particles.len(),
+            "particles_left_in_funnel": sim.particles.position.iter().filter(|x| x.z > self.z_out).count(),
+            "funnel_residue_g": self.residue_g(sim),
+            "heap_reached_outlet": self.reached_outlet(sim),
+            "warning": if self.settled_at.is_none() {
+                Some(self.not_at_rest(sim))
+            } else if self.reached_outlet(sim) {
+                Some(format!("the heap grew up to the funnel outlet ({} m above the tray): its angle is cut there and is a lower bound; raise repose.drop_height", self.p.drop_height))
+            } else { None },
+        })
+    }
+}
+
+/// The "still" path to rest: the mean speed below the outlet under this fraction of
+/// `rest_speed` for `rest_time` (see `ReposeProtocol::at_rest`).
+const STILL_FRACTION: f64 = 0.2;
+
+impl ReposeProtocol {
     /// The mean speed (m/s) of the grains below the outlet, `None` when there are none.
     fn mean_speed_below_outlet(&self, sim: &Simulation) -> Option<f64> {
         let p = &sim.particles;
@@ -452,9 +565,7 @@ impl ReposeProtocol {
         let hi = window.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         spans_window && hi - lo < self.p.rest_angle
     }
-}
 
-impl ReposeProtocol {
     /// Why a run that reached `max_time` was not at rest, in words. Either the soil below the
     /// outlet still moves on average (then more time may settle it), or it is at rest on
     /// average and a few grains keep moving: in a cohesive (JKR) model some grains rock or
@@ -556,100 +667,6 @@ impl ReposeProtocol {
             );
         }
         Ok(())
-    }
-}
-
-impl Protocol for ReposeProtocol {
-    fn control(&mut self, sim: &mut Simulation) -> Result<Control> {
-        if sim.time + 1e-12 >= self.next_check {
-            let h = observe::heap(sim, self.tray);
-            self.angles.push((sim.time, h.cone_angle_deg));
-            if let Some(v) = self.mean_speed_below_outlet(sim) {
-                self.mean_speeds.push((sim.time, v));
-            }
-            self.next_check = sim.time + self.check_every;
-            if self.at_rest(sim) {
-                // At rest with most of the soil still in the funnel is a jam, not a heap.
-                self.check_jam(sim, true)?;
-                self.settled_at = Some(sim.time);
-                return Ok(Control::Done);
-            }
-            self.check_jam(sim, false)?;
-        }
-        if sim.time >= self.p.max_time - 0.5 * sim.dt {
-            return Ok(Control::Done);
-        }
-        let mut until = self.next_check;
-        if !self.discharge.done() {
-            self.discharge.sample(sim.time, self.passed(sim));
-            until = until.min(sim.time + DISCHARGE_SAMPLE);
-        }
-        let steps = ((until - sim.time) / sim.dt).ceil().max(1.0) as u64;
-        Ok(Control::Step(steps))
-    }
-
-    fn scalars(&self, sim: &Simulation) -> Vec<(String, f64)> {
-        let h = observe::heap(sim, self.tray);
-        vec![
-            ("heap_cone_angle_deg".into(), h.cone_angle_deg),
-            ("heap_height".into(), h.height_m),
-            ("particles_on_tray".into(), h.particles_on_tray as f64),
-        ]
-    }
-
-    fn units(&self) -> Vec<(String, String)> {
-        vec![
-            ("heap_cone_angle_deg".into(), "degree".into()),
-            ("heap_height".into(), "m".into()),
-            ("particles_on_tray".into(), "count".into()),
-        ]
-    }
-
-    fn metadata(&self) -> BTreeMap<String, String> {
-        [
-            ("type", "repose".to_string()),
-            ("tray_radius_m", self.tray.radius.to_string()),
-            ("tray_top_z_m", self.tray.centre[2].to_string()),
-            ("tray_centre_x_m", "0".into()),
-            ("tray_centre_y_m", "0".into()),
-            ("drop_height_m", self.p.drop_height.to_string()),
-            ("particle_diameter_m", self.diameter.to_string()),
-            ("mass_g", self.mass_g.to_string()),
-            ("photographs", self.p.photographs.to_string()),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
-    }
-
-    fn phase(&self) -> String {
-        "pouring and settling".into()
-    }
-
-    fn progress(&self, sim: &Simulation) -> f64 {
-        (sim.time / self.p.max_time).min(1.0)
-    }
-
-    fn summary(&self, sim: &Simulation) -> serde_json::Value {
-        let h = observe::heap(sim, self.tray);
-        serde_json::json!({
-            "settled": self.settled_at.is_some(),
-            "settled_at_s": self.settled_at,
-            "heap_cone_angle_deg": h.cone_angle_deg,
-            "heap_height_m": h.height_m,
-            "particles_on_tray": h.particles_on_tray,
-            "tray_mass_g": h.mass_on_tray_kg * 1e3,
-            "funnel_flow_rate_g_s": self.discharge.rate_g_per_s(self.mass_g),
-            "particles": sim.particles.len(),
-            "particles_left_in_funnel": sim.particles.position.iter().filter(|x| x.z > self.z_out).count(),
-            "funnel_residue_g": self.residue_g(sim),
-            "heap_reached_outlet": self.reached_outlet(sim),
-            "warning": if self.settled_at.is_none() {
-                Some(self.not_at_rest(sim))
-            } else if self.reached_outlet(sim) {
-                Some(format!("the heap grew up to the funnel outlet ({} m above the tray): its angle is cut there and is a lower bound; raise repose.drop_height", self.p.drop_height))
-            } else { None },
-        })
     }
 }
 
