@@ -2,11 +2,11 @@
 
 use super::check;
 use anyhow::{Context, Result, bail};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use tilth_kernel::factory::{Basis, Factory, FactorySpec, Region};
 use tilth_kernel::material::Material;
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FactorySection {
     /// Where particles are created (the whole sphere lies inside).
@@ -16,6 +16,7 @@ pub struct FactorySection {
     /// Total number of particles to create.
     pub count: usize,
     /// Particles per second; all at once when omitted.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub rate: Option<f64>,
     /// Initial velocity, m/s (default at rest).
     #[serde(default)]
@@ -31,7 +32,7 @@ pub struct FactorySection {
 }
 
 /// `{ type = "box", min, max }` or `{ type = "cylinder", base, radius, height }` (vertical, along z).
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum RegionSection {
     /// Axis-aligned box, corners in m.
@@ -44,7 +45,7 @@ pub enum RegionSection {
     },
 }
 
-#[derive(Debug, Default, Clone, Copy, Deserialize)]
+#[derive(Debug, Default, Clone, Copy, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BasisSection {
     #[default]
@@ -53,7 +54,7 @@ pub enum BasisSection {
 }
 
 /// One size class.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SizeClass {
     /// Particle diameter, m.

@@ -1,17 +1,19 @@
 //! `[materials.NAME]`: bulk materials of particles and walls.
 
 use anyhow::{Result, bail};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use tilth_kernel::material::Material;
 
 /// One material. Give exactly one of `youngs_modulus` and `shear_modulus`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSection {
     /// Young's modulus E, Pa.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub youngs_modulus: Option<f64>,
     /// Shear modulus G, Pa (E = 2 G (1 + nu)).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub shear_modulus: Option<f64>,
     /// Poisson ratio nu, in (-1, 0.5).
     pub poisson_ratio: f64,

@@ -20,11 +20,11 @@ pub use factories::{BasisSection, FactorySection, RegionSection, SizeClass};
 pub use materials::MaterialSection;
 pub use output::OutputSection;
 pub use particles::ParticleSection;
-pub use simulation::{DomainSection, SimulationSection};
+pub use simulation::{DomainSection, STANDARD_GRAVITY, SimulationSection};
 pub use walls::{MotionSection, ShapeSection, WallSection, WallShape};
 
 use anyhow::{Context, Result, bail};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use tilth_kernel::contact::{ContactModel, ModelSpec};
@@ -38,8 +38,8 @@ pub const DEMO: &str = include_str!("../../../sweeps/scenes/pile.toml");
 /// The name the embedded demo goes by in messages.
 pub const DEMO_NAME: &str = "sweeps/scenes/pile.toml (embedded)";
 
-/// A whole scene file.
-#[derive(Debug, Deserialize)]
+/// A whole scene file (also written by the virtual lab, which builds its scenes as this).
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Scene format; only [`FORMAT_VERSION`] is accepted.
@@ -56,7 +56,7 @@ pub struct Scene {
     #[serde(default)]
     pub factories: Vec<FactorySection>,
     /// Explicit particles, created before the first step.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub particles: Vec<ParticleSection>,
     #[serde(default)]
     pub output: OutputSection,

@@ -2,13 +2,14 @@
 
 use super::check;
 use anyhow::Result;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Default, Deserialize)]
+#[derive(Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSection {
     /// Simulated time between recorded samples (time, particles, contacts, kinetic energy), s.
     /// No samples when omitted.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub every: Option<f64>,
 }
 

@@ -2,11 +2,11 @@
 
 use super::check;
 use anyhow::Result;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use tilth_kernel::material::Material;
 use tilth_kernel::particles::Particles;
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParticleSection {
     /// Centre, m.

@@ -3,25 +3,28 @@
 use super::FactorySection;
 use super::check;
 use anyhow::{Result, bail};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use tilth_kernel::DVec3;
 use tilth_kernel::particles::Particles;
 use tilth_kernel::sim::Aabb;
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimulationSection {
     /// Time step, s.
     pub dt: f64,
     /// Simulated time, s. Give exactly one of `duration` and `steps`.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub duration: Option<f64>,
     /// Number of steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub steps: Option<u64>,
     /// Gravitational acceleration, m/s^2 (default [0, 0, -9.81]).
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
     /// Verlet skin, m (default 0.2 x the smallest particle diameter). The neighbour list is
     /// rebuilt when something has moved more than half of it.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub skin: Option<f64>,
     /// Worker threads (default 1); results do not depend on it. `--threads` overrides it.
     #[serde(default = "default_threads")]
@@ -34,15 +37,18 @@ pub struct SimulationSection {
 }
 
 /// Axis-aligned box, m.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DomainSection {
     pub min: [f64; 3],
     pub max: [f64; 3],
 }
 
+/// Standard gravity pointing down the z axis, m/s^2: the default `gravity`.
+pub const STANDARD_GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
+
 fn default_gravity() -> [f64; 3] {
-    [0.0, 0.0, -9.81]
+    STANDARD_GRAVITY
 }
 fn default_threads() -> usize {
     1

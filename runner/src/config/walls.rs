@@ -7,7 +7,7 @@
 
 use super::check;
 use anyhow::{Result, anyhow, bail};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tilth_kernel::wall::axisymmetric::Axisymmetric;
 use tilth_kernel::wall::mesh::Mesh;
@@ -16,14 +16,17 @@ use tilth_kernel::wall::{Motion, Shape, Wall};
 
 /// One wall: `name`, `material`, `motion` and the keys of its shape `type`, in one table.
 /// Unknown keys are refused (by the shape, which is told the common keys apart).
-#[derive(Debug)]
+/// Written as one table too: the shape's keys beside the common ones.
+#[derive(Debug, Serialize)]
 pub struct WallSection {
     /// Shown in the summary (default `walls[k]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Material name.
     pub material: String,
     /// Default `{ type = "fixed" }`.
     pub motion: MotionSection,
+    #[serde(flatten)]
     pub shape: ShapeSection,
 }
 
@@ -81,7 +84,7 @@ impl<'de> Deserialize<'de> for WallSection {
 }
 
 /// The shape keys of a wall, chosen by `type`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum ShapeSection {
     /// Infinite plane through `point` (m) with `normal` pointing into the particle side.
@@ -186,7 +189,7 @@ fn unit_scale() -> f64 {
 
 /// `{ type = "fixed" }`, `{ type = "velocity", velocity }` or
 /// `{ type = "servo", axis, target_force, gain, max_speed }`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum MotionSection {
     /// At rest. (An empty struct variant, so that stray keys are refused.)

@@ -346,32 +346,6 @@ pub fn soil_density(model: &Model) -> Result<f64> {
     })
 }
 
-/// Helpers to write scene TOML in code.
-pub mod scene {
-    use toml::{Table, Value};
-
-    pub fn f(x: f64) -> Value {
-        Value::Float(x)
-    }
-
-    pub fn v3(a: [f64; 3]) -> Value {
-        Value::Array(a.iter().map(|&x| Value::Float(x)).collect())
-    }
-
-    pub fn s(x: &str) -> Value {
-        Value::String(x.to_string())
-    }
-
-    /// A table from (key, value) pairs.
-    pub fn t(entries: &[(&str, Value)]) -> Value {
-        let mut out = Table::new();
-        for (k, v) in entries {
-            out.insert(k.to_string(), v.clone());
-        }
-        Value::Table(out)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

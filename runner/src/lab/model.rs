@@ -27,6 +27,7 @@
 //! unchanged.
 
 use super::experiment::KINDS;
+use crate::config::{ContactSection, MaterialSection, PairSection};
 use anyhow::{Context, Result, anyhow, bail};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -191,12 +192,12 @@ impl Model {
         Ok(())
     }
 
-    /// The scene fragments (`materials`, `contact`, `pairs`) at `at`, with the bond law
-    /// and its parameters when `bonds`.
-    pub fn scene_parts(&self, at: At, bonds: bool) -> Result<(Value, Value, Value)> {
+    /// The scene sections the model gives at `at` (materials, contact laws and the pairs'
+    /// coefficients), with the bond law and its parameters when `bonds`.
+    pub fn scene_parts(&self, at: At, bonds: bool) -> Result<SceneParts> {
         self.check_conditions(at.conditions)?;
         let path = self.path.display();
-        let mut by_pair: BTreeMap<String, toml::Table> = BTreeMap::new();
+        let mut by_pair: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
         let mut add =
             |section: &str, pairs: &BTreeMap<String, BTreeMap<String, Value>>| -> Result<()> {
                 for (pair, params) in pairs {
@@ -204,43 +205,63 @@ impl Model {
                     for (key, form) in params {
                         let v = evaluate_at(form, at)
                             .map_err(|e| anyhow!("{path}: {section}.{pair}.{key}: {e}"))?;
-                        t.insert(key.clone(), Value::Float(v));
+                        t.insert(key.clone(), v);
                     }
                 }
                 Ok(())
             };
         add("pairs", &self.file.pairs)?;
-        let mut contact = self.file.contact.clone();
+        let mut contact: ContactSection = self.section("contact", &self.file.contact)?;
         if bonds {
             let b = self.file.bond.as_ref().ok_or_else(|| {
                 anyhow!("{path}: this experiment forms bonds, but the model has no [bond] section")
             })?;
             add("bond.pairs", &b.pairs)?;
             // The bond law goes with the additive laws (`extra`); the kernel gives it its slot.
-            let extra = contact
-                .entry("extra")
-                .or_insert_with(|| Value::Array(vec![]));
-            if let Value::Array(list) = extra {
-                list.push(Value::String(b.law.clone()));
-            }
+            contact.extra.push(b.law.clone());
         }
         let mut pairs = vec![];
-        for (pair, mut t) in by_pair {
+        for (pair, params) in by_pair {
             let (a, b) = pair.split_once('-').ok_or_else(|| {
                 anyhow!("{path}: [pairs.{pair}]: name a pair as material-material")
             })?;
-            t.insert(
-                "materials".into(),
-                Value::Array(vec![Value::String(a.into()), Value::String(b.into())]),
-            );
-            pairs.push(Value::Table(t));
+            pairs.push(PairSection {
+                materials: [a.into(), b.into()],
+                params,
+            });
         }
-        Ok((
-            Value::Table(self.file.materials.clone()),
-            Value::Table(contact),
-            Value::Array(pairs),
-        ))
+        Ok(SceneParts {
+            materials: self.section("materials", &self.file.materials)?,
+            contact,
+            pairs,
+        })
     }
+
+    /// A table the model passes through to the scene, read as the scene reads it, so that
+    /// a key the scene does not take is refused with the model's name.
+    fn section<T: serde::de::DeserializeOwned>(
+        &self,
+        name: &str,
+        table: &toml::Table,
+    ) -> Result<T> {
+        Value::Table(table.clone())
+            .try_into()
+            .map_err(|e: toml::de::Error| {
+                let message = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
+                anyhow!("{}: [{name}]: {message}", self.path.display())
+            })
+    }
+}
+
+/// The scene sections a model gives at some conditions.
+#[derive(Debug)]
+pub struct SceneParts {
+    /// `[materials]`, as the model has them.
+    pub materials: BTreeMap<String, MaterialSection>,
+    /// `[contact]`, with the bond law among the additive laws when the test forms bonds.
+    pub contact: ContactSection,
+    /// `[[pairs]]`, in the order of the pairs' names, each value evaluated at the conditions.
+    pub pairs: Vec<PairSection>,
 }
 
 fn number(v: &Value) -> Option<f64> {

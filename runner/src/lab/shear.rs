@@ -11,16 +11,17 @@
 //! only while the inertial number I = (v / h) d sqrt(rho / sigma_n) stays below
 //! `max_inertial_number`.
 
-use super::experiment::{Built, Common, scene::*, soil_density};
+use super::experiment::{Built, Common, soil_density};
 use super::protocol::{Control, Protocol};
+use super::scene::{self, WallId};
 use super::specimen::{self, Prep, Preparation};
+use crate::config::WallSection;
 use anyhow::{Result, bail};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use tilth_kernel::DVec3;
 use tilth_kernel::sim::Simulation;
 use tilth_kernel::wall::Motion;
-use toml::Value;
 
 /// `[direct_shear]`: the test's parameters (SI units).
 #[derive(Debug, Clone, Deserialize)]
@@ -92,23 +93,55 @@ impl Default for ShearParams {
     }
 }
 
-const LOWER: usize = 0;
-const BOTTOM: usize = 1;
-const UPPER: usize = 2;
-const PLATEN: usize = 3;
-/// The lower ring's top face and the upper ring's bottom face, as wide as the shear
-/// displacement plus two grains: once the rings are offset, soil in the upper ring that
-/// overhangs the lower one rests on the lower flange, and soil in the lower ring that the
-/// upper ring has uncovered is held down by the upper flange, as in a real box. They start
-/// half a grain outside the rings: a grain cannot pass that gap, and grains in the box do not
-/// touch four walls at once where the rings meet (four wall springs on one grain at the
-/// time step of one made the 0.34 MPa specimen blow up under load).
-const LOWER_FLANGE: usize = 4;
-const UPPER_FLANGE: usize = 5;
-
+/// The scene and protocol of a direct shear test.
 pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
     let mix = super::sizes::SizeMix::of(c.model, c.at(), d)?;
+    check_params(p, d)?;
+    let rho = soil_density(c.model)?;
+    check_pressure(c, p)?;
+    let area = std::f64::consts::PI * p.box_diameter.powi(2) / 4.0;
+    let speed = shear_speed(p, d, rho)?;
+    let loads = specimen::Loads {
+        compaction: p.compaction_force / area,
+        test: p.normal_pressure,
+    };
+    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
+    let parts = c.model.scene_parts(c.at(), true)?;
+    let r = 0.5 * p.box_diameter;
+    // Loose particles need about twice the specimen's height; the platen starts above that.
+    let z_fill = 2.4 * p.height / (p.packing / 0.55);
+    let z_top = z_fill + 2.0 * d;
+    let duration = 4.0 * p.max_phase_time + p.shear_displacement / speed + 0.5;
+    let simulation = specimen::simulation(
+        c,
+        steps.prepare,
+        duration,
+        flange_radius(p, d) + 0.02,
+        z_top + 0.02,
+        mix.min_diameter(),
+    );
+    let walls = box_walls(p, d, z_top);
+    let box_walls = BoxWalls::find(&walls)?;
+    let fill = specimen::fill(count, &mix, r - 0.6 * d, 0.6 * d, z_fill);
+    let scene = scene::scene(parts, simulation, walls, vec![fill]);
+    let prep = Preparation::new(
+        box_walls.platen,
+        p.compaction_force,
+        p.max_phase_time,
+        z_top,
+        d,
+        steps.bonded,
+    );
+    Ok(Built {
+        scene: scene::to_value(&scene)?,
+        bonded_dt: Some(steps.bonded),
+        protocol: Box::new(ShearProtocol::new(p, box_walls, prep, area, speed, d, rho)),
+    })
+}
+
+/// Refuses a specimen the particles of diameter `d` (m) do not fit and values out of range.
+fn check_params(p: &ShearParams, d: f64) -> Result<()> {
     specimen::check_fit("direct_shear", p.box_diameter, p.height, d)?;
     specimen::check_positive(
         "direct_shear",
@@ -120,8 +153,11 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
             ("max_phase_time", p.max_phase_time),
         ],
     )?;
-    specimen::check_packing("direct_shear", p.packing)?;
-    let rho = soil_density(c.model)?;
+    specimen::check_packing("direct_shear", p.packing)
+}
+
+/// Refuses a normal pressure the model's soil cannot carry.
+fn check_pressure(c: &Common, p: &ShearParams) -> Result<()> {
     let e = super::experiment::soil_modulus(c.model)?;
     // Hertz overlaps grow as (p/E)^(2/3): at p = 2 % of E they pass 7 % of the radius, where
     // the contact law stops being valid and the servo would chase a specimen it crushes.
@@ -132,7 +168,13 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
             0.02 * e
         );
     }
-    let area = std::f64::consts::PI * p.box_diameter.powi(2) / 4.0;
+    Ok(())
+}
+
+/// The shear speed, m/s, for particles of diameter `d` (m) and density `rho` (kg/m^3): the
+/// one given, or the speed at half of `max_inertial_number`; refused when the test would
+/// not be quasi-static.
+fn shear_speed(p: &ShearParams, d: f64, rho: f64) -> Result<f64> {
     let i_auto = |v: f64| specimen::inertial_number(v / p.height, d, rho, p.normal_pressure);
     let speed = match p.shear_speed {
         Some(v) if v > 0.0 && v.is_finite() => v,
@@ -147,89 +189,69 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
             p.max_inertial_number
         );
     }
+    Ok(speed)
+}
+
+/// The split box for particles of diameter `d` (m), its platen at `z_top` (m): the lower
+/// ring (fixed) on its bottom, the upper ring from the shear plane (half the specimen's
+/// height) up to the platen, and a flange on each ring at the shear plane.
+///
+/// The flanges are the lower ring's top face and the upper ring's bottom face, as wide as
+/// the shear displacement plus two grains: once the rings are offset, soil in the upper ring
+/// that overhangs the lower one rests on the lower flange, and soil in the lower ring that
+/// the upper ring has uncovered is held down by the upper flange, as in a real box. They
+/// start half a grain outside the rings: a grain cannot pass that gap, and grains in the box
+/// do not touch four walls at once where the rings meet (four wall springs on one grain at
+/// the time step of one made the 0.34 MPa specimen blow up under load).
+fn box_walls(p: &ShearParams, d: f64, z_top: f64) -> Vec<WallSection> {
     let r = 0.5 * p.box_diameter;
-    let loads = specimen::Loads {
-        compaction: p.compaction_force / area,
-        test: p.normal_pressure,
-    };
-    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
-    let (materials, contact, pairs) = c.model.scene_parts(c.at(), true)?;
-    // Loose particles need about twice the specimen's height; the platen starts above that.
     let z_mid = 0.5 * p.height;
-    let z_fill = 2.4 * p.height / (p.packing / 0.55);
-    let z_top = z_fill + 2.0 * d;
-    let flange = r + p.shear_displacement + 2.0 * d;
-    let duration = 4.0 * p.max_phase_time + p.shear_displacement / speed + 0.5;
-    let scene = t(&[
-        ("format_version", Value::Integer(1)),
-        (
-            "simulation",
-            specimen::simulation(
-                c,
-                steps.prepare,
-                duration,
-                flange + 0.02,
-                z_top + 0.02,
-                mix.min_diameter(),
-            ),
-        ),
-        ("materials", materials),
-        ("contact", contact),
-        ("pairs", pairs),
-        (
-            "walls",
-            Value::Array(vec![
-                specimen::ring("lower_box", 0.0, z_mid, r),
-                specimen::disc("bottom", 0.0, r),
-                specimen::ring("upper_box", z_mid, z_top, r),
-                specimen::disc("platen", z_top, r - 0.1 * d),
-                specimen::flange("lower_flange", z_mid, r + 0.5 * d, flange),
-                specimen::flange("upper_flange", z_mid, r + 0.5 * d, flange),
-            ]),
-        ),
-        (
-            "factories",
-            Value::Array(vec![specimen::fill(
-                count,
-                &mix,
-                r - 0.6 * d,
-                0.6 * d,
-                z_fill,
-            )]),
-        ),
-    ]);
-    Ok(Built {
-        scene,
-        bonded_dt: Some(steps.bonded),
-        protocol: Box::new(ShearProtocol {
-            prep: Preparation::new(
-                PLATEN,
-                p.compaction_force,
-                p.max_phase_time,
-                z_top,
-                d,
-                steps.bonded,
-            ),
-            phase: Phase::Prepare,
-            p: p.clone(),
-            area,
-            speed,
-            d,
-            rho,
-            bonds: 0,
-            started: 0.0,
-            in_band_since: None,
-            normal_bias: 0.0,
-            max_normal_deviation: 0.0,
-            x0: 0.0,
-            peak: (0.0, 0.0),
-            max_i: 0.0,
-            max_gap: 0.0,
-            box_force: specimen::MeanForce::new(&[LOWER, BOTTOM, LOWER_FLANGE]),
-            drive_force: specimen::MeanForce::new(&[UPPER, UPPER_FLANGE, PLATEN]),
-            platen_force: specimen::MeanForce::new(&[PLATEN]),
-        }),
-    })
+    let flange_outer = flange_radius(p, d);
+    vec![
+        scene::ring("lower_box", 0.0, z_mid, r),
+        scene::disc("bottom", 0.0, r),
+        scene::ring("upper_box", z_mid, z_top, r),
+        scene::disc("platen", z_top, r - 0.1 * d),
+        scene::flange("lower_flange", z_mid, r + 0.5 * d, flange_outer),
+        scene::flange("upper_flange", z_mid, r + 0.5 * d, flange_outer),
+    ]
+}
+
+/// The flanges' outer radius for particles of diameter `d`, m: the box's radius plus the
+/// shear displacement and two grains.
+fn flange_radius(p: &ShearParams, d: f64) -> f64 {
+    0.5 * p.box_diameter + p.shear_displacement + 2.0 * d
+}
+
+/// The walls of the split box the protocol moves and weighs.
+#[derive(Debug, Clone, Copy)]
+struct BoxWalls {
+    lower: WallId,
+    bottom: WallId,
+    upper: WallId,
+    platen: WallId,
+    lower_flange: WallId,
+    upper_flange: WallId,
+}
+
+impl BoxWalls {
+    /// Finds them by name among the walls of [`box_walls`].
+    fn find(walls: &[WallSection]) -> Result<BoxWalls> {
+        let find = |name| WallId::find(walls, name);
+        Ok(BoxWalls {
+            lower: find("lower_box")?,
+            bottom: find("bottom")?,
+            upper: find("upper_box")?,
+            platen: find("platen")?,
+            lower_flange: find("lower_flange")?,
+            upper_flange: find("upper_flange")?,
+        })
+    }
+
+    /// The half that moves: the upper ring, its flange and the platen riding on it.
+    fn moving(&self) -> [WallId; 3] {
+        [self.upper, self.upper_flange, self.platen]
+    }
 }
 
 /// Proportional gain of the platen servo while shearing, (m/s) per unit relative force
@@ -256,6 +278,7 @@ enum Phase {
 }
 
 struct ShearProtocol {
+    walls: BoxWalls,
     prep: Preparation,
     phase: Phase,
     p: ShearParams,
@@ -287,8 +310,43 @@ struct ShearProtocol {
 }
 
 impl ShearProtocol {
+    /// A test of `p` in the box `walls`, prepared by `prep`, on the shear plane's `area`
+    /// (m^2) at `speed` (m/s), with particles of diameter `d` (m) and density `rho` (kg/m^3).
+    fn new(
+        p: &ShearParams,
+        walls: BoxWalls,
+        prep: Preparation,
+        area: f64,
+        speed: f64,
+        d: f64,
+        rho: f64,
+    ) -> ShearProtocol {
+        ShearProtocol {
+            walls,
+            prep,
+            phase: Phase::Prepare,
+            p: p.clone(),
+            area,
+            speed,
+            d,
+            rho,
+            bonds: 0,
+            started: 0.0,
+            in_band_since: None,
+            normal_bias: 0.0,
+            max_normal_deviation: 0.0,
+            x0: 0.0,
+            peak: (0.0, 0.0),
+            max_i: 0.0,
+            max_gap: 0.0,
+            box_force: specimen::MeanForce::new(&[walls.lower, walls.bottom, walls.lower_flange]),
+            drive_force: specimen::MeanForce::new(&walls.moving()),
+            platen_force: specimen::MeanForce::new(&[walls.platen]),
+        }
+    }
+
     fn displacement(&self, sim: &Simulation) -> f64 {
-        sim.walls[UPPER].offset.x - self.x0
+        self.walls.upper.of(sim).offset.x - self.x0
     }
 
     /// Shear force on the lower box over the last block, N.
@@ -330,7 +388,7 @@ impl Protocol for ShearProtocol {
                         );
                     }
                     let target = self.p.normal_pressure * self.area;
-                    sim.walls[PLATEN].motion = specimen::press(target, 0.05);
+                    self.walls.platen.of_mut(sim).motion = specimen::press(target, 0.05);
                     self.phase = Phase::Load;
                     self.started = sim.time;
                 }
@@ -349,11 +407,11 @@ impl Protocol for ShearProtocol {
                 }
                 if self.in_band_since.is_some_and(|t0| sim.time - t0 > 0.01) {
                     self.phase = Phase::Shear;
-                    self.x0 = sim.walls[UPPER].offset.x;
+                    self.x0 = self.walls.upper.of(sim).offset.x;
                     let v = DVec3::new(self.speed, 0.0, 0.0);
-                    sim.walls[UPPER].motion = Motion::Velocity(v);
-                    sim.walls[UPPER_FLANGE].motion = Motion::Velocity(v);
-                    sim.walls[PLATEN].motion = Motion::ServoCarried {
+                    self.walls.upper.of_mut(sim).motion = Motion::Velocity(v);
+                    self.walls.upper_flange.of_mut(sim).motion = Motion::Velocity(v);
+                    self.walls.platen.of_mut(sim).motion = Motion::ServoCarried {
                         axis: DVec3::new(0.0, 0.0, -1.0),
                         target_force: target,
                         gain: SERVO_GAIN / target,
@@ -378,7 +436,9 @@ impl Protocol for ShearProtocol {
                 // as contacts come and go, its block mean does not.
                 self.normal_bias = (self.normal_bias + SERVO_INTEGRAL * (target - fz))
                     .clamp(-0.5 * target, 0.5 * target);
-                if let Motion::ServoCarried { target_force, .. } = &mut sim.walls[PLATEN].motion {
+                if let Motion::ServoCarried { target_force, .. } =
+                    &mut self.walls.platen.of_mut(sim).motion
+                {
                     *target_force = target + self.normal_bias;
                 }
                 if fx > self.peak.1 {
@@ -394,8 +454,8 @@ impl Protocol for ShearProtocol {
                     self.max_gap = self.max_gap.max((fx - drive).abs());
                 }
                 if x >= self.p.shear_displacement {
-                    for k in [UPPER, UPPER_FLANGE, PLATEN] {
-                        sim.walls[k].motion = Motion::Fixed;
+                    for wall in self.walls.moving() {
+                        wall.of_mut(sim).motion = Motion::Fixed;
                     }
                     self.phase = Phase::Done;
                     return Ok(Control::Done);

@@ -5,9 +5,9 @@
 //! effect, `[candidates.fines]` in models/li2022.toml).
 
 use super::model::{At, Model, evaluate_at};
+use crate::config::SizeClass;
 use anyhow::{Result, anyhow, bail};
 use std::f64::consts::PI;
-use toml::Value;
 
 /// Fine diameter / the test's diameter when the model does not say.
 pub const DEFAULT_FINE_RATIO: f64 = 0.5;
@@ -59,8 +59,8 @@ impl SizeMix {
     }
 
     /// The number of particles that make `solid_volume` m^3 of solid, on average.
-    pub fn count(&self, solid_volume: f64) -> i64 {
-        (solid_volume * self.per_solid_volume()).round() as i64
+    pub fn count(&self, solid_volume: f64) -> usize {
+        (solid_volume * self.per_solid_volume()).round() as usize
     }
 
     /// The smallest diameter (it sets the time step), m.
@@ -72,18 +72,11 @@ impl SizeMix {
     }
 
     /// The factory's `sizes` list (mass fractions: use with `basis = "mass"`).
-    pub fn sizes(&self) -> Value {
-        Value::Array(
-            self.classes
-                .iter()
-                .map(|&(d, w)| {
-                    let mut t = toml::Table::new();
-                    t.insert("diameter".into(), Value::Float(d));
-                    t.insert("fraction".into(), Value::Float(w));
-                    Value::Table(t)
-                })
-                .collect(),
-        )
+    pub fn size_classes(&self) -> Vec<SizeClass> {
+        self.classes
+            .iter()
+            .map(|&(diameter, fraction)| SizeClass { diameter, fraction })
+            .collect()
     }
 }
 
@@ -100,7 +93,7 @@ mod tests {
         // 1 cm^3 of solid: 0.8 cm^3 of 4 mm grains and 0.2 cm^3 of 2 mm grains.
         let expect = 0.8e-6 / v(0.004) + 0.2e-6 / v(0.002);
         assert!((mix.per_solid_volume() * 1e-6 - expect).abs() < 1e-9 * expect);
-        assert_eq!(mix.count(1e-6), expect.round() as i64);
+        assert_eq!(mix.count(1e-6), expect.round() as usize);
         assert_eq!(mix.min_diameter(), 0.002);
     }
 }

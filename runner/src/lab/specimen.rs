@@ -1,16 +1,15 @@
 //! What the direct shear and UCS tests share: filling a cylindrical mould, settling,
 //! compacting with a servo platen, forming bonds, and the inertial number.
 
-use super::experiment::{
-    Common, rayleigh_time, scene::*, soil_density, soil_modulus, soil_poisson_ratio,
-};
+use super::experiment::{Common, rayleigh_time, soil_density, soil_modulus, soil_poisson_ratio};
+use super::scene::{self, WallId};
 use super::sizes::SizeMix;
+use crate::config::{FactorySection, SimulationSection};
 use anyhow::{Result, bail};
 use tilth_kernel::DVec3;
 use tilth_kernel::sim::Simulation;
 use tilth_kernel::timestep::{LOADED_COORDINATION, LoadedPacking, loaded_packing_step};
 use tilth_kernel::wall::Motion;
-use toml::Value;
 
 /// Mean particle speed, m/s.
 pub fn mean_speed(sim: &Simulation) -> f64 {
@@ -34,14 +33,14 @@ pub fn top(sim: &Simulation) -> f64 {
 /// thousand steps can land anywhere in that swing.
 #[derive(Debug, Clone)]
 pub struct MeanForce {
-    walls: Vec<usize>,
+    walls: Vec<WallId>,
     impulse: DVec3,
     time: f64,
 }
 
 impl MeanForce {
     /// Averages the total force on `walls` from the start of the run (zero impulse at t = 0).
-    pub fn new(walls: &[usize]) -> MeanForce {
+    pub fn new(walls: &[WallId]) -> MeanForce {
         MeanForce {
             walls: walls.to_vec(),
             impulse: DVec3::ZERO,
@@ -51,7 +50,7 @@ impl MeanForce {
 
     /// Starts a new interval now.
     pub fn mark(&mut self, sim: &Simulation) {
-        self.impulse = self.walls.iter().map(|&k| sim.walls[k].impulse).sum();
+        self.impulse = self.walls.iter().map(|w| w.of(sim).impulse).sum();
         self.time = sim.time;
     }
 
@@ -59,9 +58,9 @@ impl MeanForce {
     pub fn mean(&self, sim: &Simulation) -> DVec3 {
         let span = sim.time - self.time;
         if span <= 0.0 {
-            return self.walls.iter().map(|&k| sim.walls[k].force).sum();
+            return self.walls.iter().map(|w| w.of(sim).force).sum();
         }
-        let now: DVec3 = self.walls.iter().map(|&k| sim.walls[k].impulse).sum();
+        let now: DVec3 = self.walls.iter().map(|w| w.of(sim).impulse).sum();
         (now - self.impulse) / span
     }
 }
@@ -130,7 +129,7 @@ pub fn particles_for(
     volume: f64,
     packing: f64,
     loads: Loads,
-) -> Result<(Steps, i64)> {
+) -> Result<(Steps, usize)> {
     let d = mix.min_diameter();
     let steps = match c.sim.dt {
         Some(dt) => Steps {
@@ -154,12 +153,11 @@ pub fn particles_for(
 /// The smallest restitution coefficient of the model's material pairs at these conditions
 /// (1 where a pair has none: undamped), for [`loaded_steps`].
 fn soil_restitution(c: &Common) -> Result<f64> {
-    let (_, _, pairs) = c.model.scene_parts(c.at(), true)?;
-    Ok(pairs
-        .as_array()
-        .into_iter()
-        .flatten()
-        .filter_map(|pair| pair.get("restitution").and_then(Value::as_float))
+    let parts = c.model.scene_parts(c.at(), true)?;
+    Ok(parts
+        .pairs
+        .iter()
+        .filter_map(|pair| pair.params.get("restitution").copied())
         .fold(1.0, f64::min))
 }
 
@@ -232,81 +230,25 @@ pub fn check_fit(section: &str, box_diameter: f64, height: f64, d: f64) -> Resul
     Ok(())
 }
 
-/// A disc wall.
-pub fn disc(name: &str, z: f64, radius: f64) -> Value {
-    t(&[
-        ("name", s(name)),
-        ("type", s("disc")),
-        ("centre", v3([0.0, 0.0, z])),
-        ("axis", v3([0.0, 0.0, 1.0])),
-        ("radius", f(radius)),
-        ("material", s("steel")),
-    ])
-}
-
-/// A flat ring of steel between radii `inner` and `outer` at height `z` (a box's flange).
-pub fn flange(name: &str, z: f64, inner: f64, outer: f64) -> Value {
-    t(&[
-        ("name", s(name)),
-        ("type", s("disc")),
-        ("centre", v3([0.0, 0.0, z])),
-        ("axis", v3([0.0, 0.0, 1.0])),
-        ("radius", f(outer)),
-        ("inner_radius", f(inner)),
-        ("material", s("steel")),
-    ])
-}
-
-/// An open cylinder wall from `z0` to `z1`.
-pub fn ring(name: &str, z0: f64, z1: f64, radius: f64) -> Value {
-    t(&[
-        ("name", s(name)),
-        ("type", s("cylinder")),
-        ("base", v3([0.0, 0.0, z0])),
-        ("axis", v3([0.0, 0.0, 1.0])),
-        ("radius", f(radius)),
-        ("length", f(z1 - z0)),
-        ("material", s("steel")),
-    ])
-}
-
 /// A factory filling a cylinder of `radius` between `z0` and `z1` with `count` particles of
-/// the size mix `mix`.
-pub fn fill(count: i64, mix: &SizeMix, radius: f64, z0: f64, z1: f64) -> Value {
-    t(&[
-        (
-            "region",
-            t(&[
-                ("type", s("cylinder")),
-                ("base", v3([0.0, 0.0, z0])),
-                ("radius", f(radius)),
-                ("height", f(z1 - z0)),
-            ]),
-        ),
-        ("material", s("soil")),
-        ("count", Value::Integer(count)),
-        ("rate", f(2.0e5)),
-        ("basis", s("mass")),
-        ("sizes", mix.sizes()),
-    ])
+/// the size mix `mix`, all within a few milliseconds.
+pub fn fill(count: usize, mix: &SizeMix, radius: f64, z0: f64, z1: f64) -> FactorySection {
+    let region = scene::cylinder_region(radius, z0, z1);
+    scene::soil_factory(region, count, 2.0e5, [0.0; 3], mix)
 }
 
-/// The `[simulation]` table of a specimen test.
-pub fn simulation(c: &Common, dt: f64, duration: f64, half: f64, top: f64, d: f64) -> Value {
-    t(&[
-        ("dt", f(dt)),
-        ("skin", f(c.sim.skin_fraction.unwrap_or(0.2) * d)),
-        ("duration", f(duration)),
-        ("seed", Value::Integer(c.sim.seed as i64)),
-        ("threads", Value::Integer(c.sim.threads as i64)),
-        (
-            "domain",
-            t(&[
-                ("min", v3([-half, -half, -0.01])),
-                ("max", v3([half, half, top])),
-            ]),
-        ),
-    ])
+/// The `[simulation]` of a specimen test: a domain `half` wide each way of the axis and up to
+/// `top`, the skin `skin_fraction` (default 0.2) of the smallest diameter `d`.
+pub fn simulation(
+    c: &Common,
+    dt: f64,
+    duration: f64,
+    half: f64,
+    top: f64,
+    d: f64,
+) -> SimulationSection {
+    let skin = c.sim.skin_fraction.unwrap_or(0.2) * d;
+    scene::simulation(c, dt, duration, skin, scene::domain(half, -0.01, top))
 }
 
 /// Phases of preparing a specimen, in order.
@@ -322,7 +264,7 @@ pub enum Prep {
 /// compacted (force within 5 % for `hold` s and particles nearly at rest).
 pub struct Preparation {
     pub phase: Prep,
-    pub platen: usize,
+    pub platen: WallId,
     pub force: f64,
     pub started: f64,
     pub in_band_since: Option<f64>,
@@ -339,7 +281,7 @@ impl Preparation {
     /// Preparation with platen wall `platen` (its shape at height `platen_z`, m) compacting
     /// particles of diameter `diameter` (m) to `force` (N), each phase within `max_phase_time` s.
     pub fn new(
-        platen: usize,
+        platen: WallId,
         force: f64,
         max_phase_time: f64,
         platen_z: f64,
@@ -398,14 +340,15 @@ impl Preparation {
                     // Nothing lies between the platen and the loose fill: bring it down to
                     // half a diameter above the highest particle at once instead of driving it.
                     let offset = top(sim) + 0.5 * self.diameter - self.platen_z;
-                    if offset < sim.walls[self.platen].offset.z {
-                        sim.walls[self.platen].offset.z = offset;
+                    let platen = self.platen.of_mut(sim);
+                    if offset < platen.offset.z {
+                        platen.offset.z = offset;
                     }
-                    sim.walls[self.platen].motion = press(self.force, 0.05);
+                    platen.motion = press(self.force, 0.05);
                 }
             }
             Prep::Compact => {
-                let f = sim.walls[self.platen].force.z;
+                let f = self.platen.of(sim).force.z;
                 let in_band = (f - self.force).abs() < 0.05 * self.force;
                 match (in_band, self.in_band_since) {
                     (true, None) => self.in_band_since = Some(sim.time),
@@ -436,10 +379,10 @@ impl Preparation {
 /// bond spring (s): S the larger of the normal and shear stiffness per area, since either
 /// spring oscillates on that time scale.
 pub fn bond_time_scale(c: &Common, d: f64) -> Result<f64> {
-    let (_, _, pairs) = c.model.scene_parts(c.at(), true)?;
+    let parts = c.model.scene_parts(c.at(), true)?;
     let mut k_max: f64 = 0.0;
-    for pair in pairs.as_array().into_iter().flatten() {
-        let num = |k: &str| pair.get(k).and_then(Value::as_float);
+    for pair in &parts.pairs {
+        let num = |k: &str| pair.params.get(k).copied();
         let stiffest = ["normal_stiffness_per_area", "shear_stiffness_per_area"]
             .into_iter()
             .filter_map(num)

@@ -8,16 +8,17 @@
 //! inertial number I = (v / h0) d sqrt(rho / sigma) computed at `reference_stress` (the
 //! stress scale of the test; the actual I along the test is reported).
 
-use super::experiment::{Built, Common, scene::*, soil_density};
+use super::experiment::{Built, Common, soil_density};
 use super::protocol::{Control, Protocol};
+use super::scene::{self, WallId};
 use super::specimen::{self, Prep, Preparation};
+use crate::config::WallSection;
 use anyhow::{Result, bail};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use tilth_kernel::DVec3;
 use tilth_kernel::sim::Simulation;
 use tilth_kernel::wall::Motion;
-use toml::Value;
 
 /// `[ucs]`: the test's parameters (SI units).
 #[derive(Debug, Clone, Deserialize)]
@@ -90,14 +91,79 @@ impl Default for UcsParams {
     }
 }
 
-const MOULD: usize = 1;
-const PLATEN: usize = 2;
 /// The fragment catcher's radius beyond the specimen's, m (inside the domain's r + 0.05).
 const CATCHER_GAP: f64 = 0.04;
 
+/// The scene and protocol of an unconfined compression test.
 pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     let d = super::experiment::particle_diameter(c, p.diameter);
     let mix = super::sizes::SizeMix::of(c.model, c.at(), d)?;
+    check_params(p, d)?;
+    let rho = soil_density(c.model)?;
+    let speed = platen_speed(p, d, rho)?;
+    let r = 0.5 * p.mould_diameter;
+    let area = std::f64::consts::PI * r * r;
+    let loads = specimen::Loads {
+        compaction: p.compaction_force / area,
+        test: p.reference_stress,
+    };
+    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
+    let parts = c.model.scene_parts(c.at(), true)?;
+    let z_fill = 2.4 * p.height / (p.packing / 0.55);
+    let z_top = z_fill + 2.0 * d;
+    let duration = 4.0 * p.max_phase_time + p.max_strain * p.height / speed + 0.5;
+    let simulation = specimen::simulation(
+        c,
+        steps.prepare,
+        duration,
+        r + 0.05,
+        z_top + 0.02,
+        mix.min_diameter(),
+    );
+    let walls = mould_walls(r, z_top);
+    let (mould, platen) = (
+        WallId::find(&walls, "mould")?,
+        WallId::find(&walls, "platen")?,
+    );
+    let fill = specimen::fill(count, &mix, r - 0.6 * d, 0.6 * d, z_fill);
+    let scene = scene::scene(parts, simulation, walls, vec![fill]);
+    let prep = Preparation::new(
+        platen,
+        p.compaction_force,
+        p.max_phase_time,
+        z_top,
+        d,
+        steps.bonded,
+    );
+    Ok(Built {
+        scene: scene::to_value(&scene)?,
+        bonded_dt: Some(steps.bonded),
+        protocol: Box::new(UcsProtocol {
+            mould,
+            platen,
+            prep,
+            phase: Phase::Prepare,
+            p: p.clone(),
+            area,
+            speed,
+            d,
+            rho,
+            bonds: 0,
+            started: 0.0,
+            z0: 0.0,
+            h0: 0.0,
+            peak: Peak::default(),
+            max_i: 0.0,
+            stop_reason: String::new(),
+            platen_z: z_top,
+            adaptive: p.speed.is_none(),
+            platen_force: specimen::MeanForce::new(&[platen]),
+        }),
+    })
+}
+
+/// Refuses a specimen the particles of diameter `d` (m) do not fit and values out of range.
+fn check_params(p: &UcsParams, d: f64) -> Result<()> {
     specimen::check_fit("ucs", p.mould_diameter, p.height, d)?;
     specimen::check_positive(
         "ucs",
@@ -120,8 +186,13 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
             p.peak_drop
         );
     }
-    specimen::check_packing("ucs", p.packing)?;
-    let rho = soil_density(c.model)?;
+    specimen::check_packing("ucs", p.packing)
+}
+
+/// The platen's speed, m/s, for particles of diameter `d` (m) and density `rho` (kg/m^3): the
+/// one given, or the speed at half of `max_inertial_number` at `reference_stress` (the
+/// adaptive speed's ceiling); refused when it passes that limit.
+fn platen_speed(p: &UcsParams, d: f64, rho: f64) -> Result<f64> {
     let i_at = |v: f64, h: f64| specimen::inertial_number(v / h, d, rho, p.reference_stress);
     let speed = match p.speed {
         Some(v) if v > 0.0 && v.is_finite() => v,
@@ -136,92 +207,21 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
             p.max_inertial_number
         );
     }
-    let r = 0.5 * p.mould_diameter;
-    let area = std::f64::consts::PI * r * r;
-    let loads = specimen::Loads {
-        compaction: p.compaction_force / area,
-        test: p.reference_stress,
-    };
-    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
-    let (materials, contact, pairs) = c.model.scene_parts(c.at(), true)?;
-    let z_fill = 2.4 * p.height / (p.packing / 0.55);
-    let z_top = z_fill + 2.0 * d;
-    let duration = 4.0 * p.max_phase_time + p.max_strain * p.height / speed + 0.5;
-    let scene = t(&[
-        ("format_version", Value::Integer(1)),
-        (
-            "simulation",
-            specimen::simulation(
-                c,
-                steps.prepare,
-                duration,
-                r + 0.05,
-                z_top + 0.02,
-                mix.min_diameter(),
-            ),
-        ),
-        ("materials", materials),
-        ("contact", contact),
-        ("pairs", pairs),
-        (
-            "walls",
-            Value::Array(vec![
-                t(&[
-                    ("name", s("base")),
-                    ("type", s("plane")),
-                    ("point", v3([0.0, 0.0, 0.0])),
-                    ("normal", v3([0.0, 0.0, 1.0])),
-                    ("material", s("steel")),
-                ]),
-                specimen::ring("mould", 0.0, z_top, r),
-                specimen::disc("platen", z_top, r + 0.02),
-                // A brittle specimen throws fragments at up to about 1 m/s when it fails;
-                // without a wall around it they leave the domain and end the run as an
-                // error. The catcher holds them on the base, well clear of the specimen.
-                specimen::ring("catcher", 0.0, z_top + 0.02, r + CATCHER_GAP),
-            ]),
-        ),
-        (
-            "factories",
-            Value::Array(vec![specimen::fill(
-                count,
-                &mix,
-                r - 0.6 * d,
-                0.6 * d,
-                z_fill,
-            )]),
-        ),
-    ]);
-    Ok(Built {
-        scene,
-        bonded_dt: Some(steps.bonded),
-        protocol: Box::new(UcsProtocol {
-            prep: Preparation::new(
-                PLATEN,
-                p.compaction_force,
-                p.max_phase_time,
-                z_top,
-                d,
-                steps.bonded,
-            ),
-            phase: Phase::Prepare,
-            p: p.clone(),
-            area,
-            speed,
-            d,
-            rho,
-            bonds: 0,
-            started: 0.0,
-            z0: 0.0,
-            h0: 0.0,
-            peak: Peak::default(),
-            max_i: 0.0,
-            stop_reason: String::new(),
-            platen_z: z_top,
-            adaptive: p.speed.is_none(),
-            platen_force: specimen::MeanForce::new(&[PLATEN]),
-        }),
-    })
+    Ok(speed)
+}
+
+/// The rig for a specimen of radius `r` (m) with the platen at `z_top` (m): the base, the
+/// mould (removed once the bonds form), the platen and the fragment catcher.
+fn mould_walls(r: f64, z_top: f64) -> Vec<WallSection> {
+    vec![
+        scene::floor("base"),
+        scene::ring("mould", 0.0, z_top, r),
+        scene::disc("platen", z_top, r + 0.02),
+        // A brittle specimen throws fragments at up to about 1 m/s when it fails; without a
+        // wall around it they leave the domain and end the run as an error. The catcher
+        // holds them on the base, well clear of the specimen.
+        scene::ring("catcher", 0.0, z_top + 0.02, r + CATCHER_GAP),
+    ]
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -241,6 +241,10 @@ struct Peak {
 }
 
 struct UcsProtocol {
+    /// Removed once the bonds form.
+    mould: WallId,
+    /// Compacts, then compresses the free specimen.
+    platen: WallId,
     prep: Preparation,
     phase: Phase,
     p: UcsParams,
@@ -267,7 +271,7 @@ struct UcsProtocol {
 impl UcsProtocol {
     fn strain(&self, sim: &Simulation) -> f64 {
         if self.h0 > 0.0 {
-            (self.z0 - sim.walls[PLATEN].offset.z) / self.h0
+            (self.z0 - self.platen.of(sim).offset.z) / self.h0
         } else {
             0.0
         }
@@ -295,8 +299,8 @@ impl Protocol for UcsProtocol {
                             sim.step
                         );
                     }
-                    sim.set_wall_active(MOULD, false);
-                    sim.walls[PLATEN].motion = Motion::Fixed;
+                    sim.set_wall_active(self.mould.index(), false);
+                    self.platen.of_mut(sim).motion = Motion::Fixed;
                     self.phase = Phase::Release;
                     self.started = sim.time;
                 }
@@ -304,7 +308,7 @@ impl Protocol for UcsProtocol {
             Phase::Release => {
                 if specimen::mean_speed(sim) < 0.005 || sim.time - self.started > 0.1 {
                     // The specimen's height is the distance from the base to the platen.
-                    self.z0 = sim.walls[PLATEN].offset.z;
+                    self.z0 = self.platen.of(sim).offset.z;
                     self.h0 = self.platen_z + self.z0;
                     if self.h0 < 4.0 * self.d || specimen::top(sim) < 0.5 * self.h0 {
                         bail!(
@@ -320,7 +324,7 @@ impl Protocol for UcsProtocol {
                     } else {
                         self.speed
                     };
-                    sim.walls[PLATEN].motion = Motion::Velocity(DVec3::new(0.0, 0.0, -v));
+                    self.platen.of_mut(sim).motion = Motion::Velocity(DVec3::new(0.0, 0.0, -v));
                     self.phase = Phase::Compress;
                 }
             }
@@ -336,7 +340,7 @@ impl Protocol for UcsProtocol {
                         stress: sigma,
                     };
                 }
-                let v_now = -sim.walls[PLATEN].velocity.z;
+                let v_now = -self.platen.of(sim).velocity.z;
                 let i = specimen::inertial_number(
                     v_now / self.h0.max(1e-9),
                     self.d,
@@ -355,7 +359,7 @@ impl Protocol for UcsProtocol {
                         sigma.max(1.0e3),
                     );
                     let v = (0.5 * self.p.max_inertial_number / unit).min(self.speed);
-                    sim.walls[PLATEN].motion = Motion::Velocity(DVec3::new(0.0, 0.0, -v));
+                    self.platen.of_mut(sim).motion = Motion::Velocity(DVec3::new(0.0, 0.0, -v));
                 }
                 let past_peak = self.peak.stress > 0.0
                     && sigma < self.p.peak_drop * self.peak.stress
@@ -366,7 +370,7 @@ impl Protocol for UcsProtocol {
                     } else {
                         format!("axial strain reached {}", self.p.max_strain)
                     };
-                    sim.walls[PLATEN].motion = Motion::Fixed;
+                    self.platen.of_mut(sim).motion = Motion::Fixed;
                     self.phase = Phase::Done;
                     return Ok(Control::Done);
                 }
@@ -388,7 +392,7 @@ impl Protocol for UcsProtocol {
             let eps = self.strain(sim);
             let f = self.force(sim);
             let sigma = f / (self.area / (1.0 - eps).max(1e-6));
-            let v = -sim.walls[PLATEN].velocity.z;
+            let v = -self.platen.of(sim).velocity.z;
             out.push(("axial_strain".into(), eps));
             out.push(("axial_force".into(), f));
             out.push((
