@@ -6,7 +6,7 @@
 For each case (`base`: the model of models/li2022.toml as LAMMPS writes it; `twisting`: the
 same with LAMMPS's `twisting marshall`, an effect the model lacks) and each moisture level it
 runs funnel.lammps REPLICATES times from different random packings, reduces every run to the
-lab's four readings with the definitions of runner/src/lab/repose.rs, discharge.rs and
+lab's four readings with the definitions of runner/src/lab/repose/mod.rs, discharge.rs and
 runner/src/lab/observe.rs, and writes <case>.csv (the measurement file `tilth diagnose`
 reads) and <case>-runs.csv (every run's readings). Needs `lmp` (Debian package lammps,
 20220106) and Python 3.11 (tomllib); LMP=/path/to/lmp overrides.
@@ -28,7 +28,7 @@ MODEL = HERE.parents[2] / "models" / "li2022.toml"
 LEVELS = [3.0, 6.0, 9.0, 12.0]
 CASES = {"base": "twisting none", "twisting": "twisting marshall"}
 
-# The lab's coarse preset of the funnel test (runner/src/lab/repose.rs), m, kg, s.
+# The lab's coarse preset of the funnel test (runner/src/lab/repose/mod.rs), m, kg, s.
 D = 0.004
 MASS_G = 40.0
 TRAY_R, Z_TRAY, Z_OUT = 0.0618 / 2, 0.020, 0.080
