@@ -41,6 +41,36 @@ struct RowChunk {
     j: Vec<u32>,
 }
 
+/// What the first pass of a rebuild reads: the particles, their cells, the list distance
+/// beyond touching `extra` (m), and the old list with what keeps its pairs (see
+/// [`PairList::rebuild_keeping`]).
+struct Search<'a> {
+    position: &'a [DVec3],
+    radius: &'a [f64],
+    id: &'a [u32],
+    extra: f64,
+    grid: &'a CellGrid,
+    old: &'a PairList,
+    /// The index each particle had when the old list was built.
+    old_of_new: Option<&'a [u32]>,
+    /// Its inverse, when pairs are kept: the new index of each old particle.
+    new_of_old: Option<&'a [u32]>,
+    keep: Option<PairFilter<'a>>,
+}
+
+/// One task's part of a rebuild's second pass: the rows of particles `first_row..` (whose
+/// pairs start at pair `at` of the new list), their partners, and the new list's slices it
+/// fills: first members, partners, row ends and history.
+struct RowTask<'a> {
+    first_row: usize,
+    at: usize,
+    chunk: RowChunk,
+    i: &'a mut [u32],
+    j: &'a mut [u32],
+    starts: &'a mut [u32],
+    history: &'a mut [f64],
+}
+
 impl PairList {
     pub fn empty(stride: usize) -> PairList {
         PairList {
@@ -107,127 +137,29 @@ impl PairList {
         // cache; `strace` counted its futex waits).
         let old_rows = self.row_start.len().saturating_sub(1).max(1);
         let per_row = self.j.len().div_ceil(old_rows).max(4) * 5 / 4;
+        let search = Search {
+            position,
+            radius,
+            id,
+            extra,
+            grid: &grid,
+            old,
+            old_of_new,
+            new_of_old: new_of_old.as_deref(),
+            keep,
+        };
         let chunks: Vec<RowChunk> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .with_max_len(chunks_per_task())
-            .map(|c| {
-                let rows = c * CHUNK..((c + 1) * CHUNK).min(n);
-                let mut out = RowChunk {
-                    counts: Vec::with_capacity(rows.len()),
-                    j: Vec::with_capacity(rows.len() * per_row),
-                };
-                let mut near = Vec::with_capacity(64);
-                for i in rows {
-                    near.clear();
-                    let (pi, ri) = (position[i], radius[i]);
-                    let idi = id[i];
-                    // Room for every candidate at once: sized run by run, the vector's
-                    // bookkeeping and zero fill came nine times a particle.
-                    let (runs, count, points) = grid.near_runs(pi);
-                    near.resize(points, 0);
-                    let mut len = 0;
-                    for run in &runs[..count] {
-                        // Whether a candidate is kept is close to a coin toss (about half
-                        // have the larger id), which a branch predictor loses: write every
-                        // candidate and advance past the kept ones only. 30 % off the search
-                        // on the settling bed; the list is the same.
-                        for &j in *run {
-                            let ju = j as usize;
-                            let cut = ri + radius[ju] + extra;
-                            let close = (position[ju] - pi).length_squared() < cut * cut;
-                            near[len] = j;
-                            len += ((id[ju] > idi) & close) as usize;
-                        }
-                    }
-                    near.truncate(len);
-                    if let Some(keep) = keep {
-                        for q in old.row_of(old_of_new.map_or(i, |m| m[i] as usize)) {
-                            if keep(&old.history[q * stride..(q + 1) * stride]) {
-                                let j = match &new_of_old {
-                                    None => old.j[q],
-                                    Some(inv) => inv[old.j[q] as usize],
-                                };
-                                near.push(j);
-                            }
-                        }
-                        near.sort_unstable();
-                        near.dedup();
-                    } else {
-                        near.sort_unstable();
-                    }
-                    out.counts.push(near.len() as u32);
-                    out.j.extend_from_slice(&near);
-                }
-                out
-            })
+            .map(|c| search.rows(c * CHUNK..((c + 1) * CHUNK).min(n), per_row))
             .collect();
-
-        let total: usize = chunks.iter().map(|c| c.j.len()).sum();
-        // Refill the spare buffers, every value of which the tasks below write, in parallel:
-        // joining the chunks' rows and zeroing the history first were serial passes while
-        // the other thread waited.
-        resized(&mut b.i, total);
-        resized(&mut b.j, total);
-        resized(&mut b.row_start, n + 1);
-        resized(&mut b.history, total * stride);
-        b.row_start[0] = 0;
-        let mut tasks = Vec::with_capacity(chunks.len());
-        {
-            let (mut is, mut js) = (&mut b.i[..], &mut b.j[..]);
-            let (mut starts, mut hist) = (&mut b.row_start[1..], &mut b.history[..]);
-            let mut at = 0;
-            for (c, chunk) in chunks.into_iter().enumerate() {
-                let len = chunk.j.len();
-                let (i1, i2) = std::mem::take(&mut is).split_at_mut(len);
-                let (j1, j2) = std::mem::take(&mut js).split_at_mut(len);
-                let (s1, s2) = std::mem::take(&mut starts).split_at_mut(chunk.counts.len());
-                let (h1, h2) = std::mem::take(&mut hist).split_at_mut(len * stride);
-                (is, js, starts, hist) = (i2, j2, s2, h2);
-                tasks.push((c * CHUNK, at, chunk, (i1, j1, s1, h1)));
-                at += len;
-            }
-        }
+        let tasks = b.refill(chunks, n, stride);
         // Each row's pairs and their history, carried from the old row of the same particle
-        // (zero for a new pair). Without a reorder both rows ascend in j and merge; after
-        // one, look each partner up.
+        // (zero for a new pair).
         tasks
             .into_par_iter()
             .with_max_len(chunks_per_task())
-            .for_each(|(first_row, at, chunk, (is, js, starts, hist))| {
-                js.copy_from_slice(&chunk.j);
-                let mut p = 0;
-                for (r, &count) in chunk.counts.iter().enumerate() {
-                    let i = first_row + r;
-                    let row = p..p + count as usize;
-                    is[row.clone()].fill(i as u32);
-                    starts[r] = (at + row.end) as u32;
-                    let old_row = old.row_of(old_of_new.map_or(i, |m| m[i] as usize));
-                    let mut k = old_row.start;
-                    for p in row.clone() {
-                        let j = chunk.j[p];
-                        let found = match old_of_new {
-                            None => {
-                                while k < old_row.end && old.j[k] < j {
-                                    k += 1;
-                                }
-                                (k < old_row.end && old.j[k] == j).then_some(k)
-                            }
-                            Some(m) => {
-                                let oj = m[j as usize];
-                                old_row.clone().find(|&q| old.j[q] == oj)
-                            }
-                        };
-                        let h = &mut hist[p * stride..(p + 1) * stride];
-                        match found {
-                            Some(q) => {
-                                h.copy_from_slice(&old.history[q * stride..(q + 1) * stride])
-                            }
-                            None => h.fill(0.0),
-                        }
-                    }
-                    p = row.end;
-                }
-            });
+            .for_each(|task| old.carry_history(old_of_new, task));
         let list = PairList {
             i: b.i,
             j: b.j,
@@ -243,6 +175,55 @@ impl PairList {
             row_start: old.row_start,
             history: old.history,
         };
+    }
+
+    /// Fills one task's part of the new list: each row's first members, partners and end,
+    /// and each pair's history, carried from the pair of the same particles in this (old)
+    /// list, zero for a new pair. Without a reorder both rows ascend in j and merge; after
+    /// one, look each partner up.
+    fn carry_history(&self, old_of_new: Option<&[u32]>, task: RowTask) {
+        let old = self;
+        let stride = self.stride;
+        let RowTask {
+            first_row,
+            at,
+            chunk,
+            i: is,
+            j: js,
+            starts,
+            history: hist,
+        } = task;
+        js.copy_from_slice(&chunk.j);
+        let mut p = 0;
+        for (r, &count) in chunk.counts.iter().enumerate() {
+            let i = first_row + r;
+            let row = p..p + count as usize;
+            is[row.clone()].fill(i as u32);
+            starts[r] = (at + row.end) as u32;
+            let old_row = old.row_of(old_of_new.map_or(i, |m| m[i] as usize));
+            let mut k = old_row.start;
+            for p in row.clone() {
+                let j = chunk.j[p];
+                let found = match old_of_new {
+                    None => {
+                        while k < old_row.end && old.j[k] < j {
+                            k += 1;
+                        }
+                        (k < old_row.end && old.j[k] == j).then_some(k)
+                    }
+                    Some(m) => {
+                        let oj = m[j as usize];
+                        old_row.clone().find(|&q| old.j[q] == oj)
+                    }
+                };
+                let h = &mut hist[p * stride..(p + 1) * stride];
+                match found {
+                    Some(q) => h.copy_from_slice(&old.history[q * stride..(q + 1) * stride]),
+                    None => h.fill(0.0),
+                }
+            }
+            p = row.end;
+        }
     }
 
     /// The pairs in the row of particle `p` (as it was numbered when this list was built);
@@ -288,9 +269,108 @@ pub(crate) fn resized<T: Default + Clone>(v: &mut Vec<T>, len: usize) {
     v.resize(len, T::default());
 }
 
+impl Search<'_> {
+    /// The partners of particles `rows` (one task's chunk), with room for `per_row` a row.
+    fn rows(&self, rows: std::ops::Range<usize>, per_row: usize) -> RowChunk {
+        let mut out = RowChunk {
+            counts: Vec::with_capacity(rows.len()),
+            j: Vec::with_capacity(rows.len() * per_row),
+        };
+        let mut near = Vec::with_capacity(64);
+        for i in rows {
+            self.partners(i, &mut near);
+            out.counts.push(near.len() as u32);
+            out.j.extend_from_slice(&near);
+        }
+        out
+    }
+
+    /// Sets `near` to particle i's partners, ascending: the particles of larger id whose
+    /// surfaces are closer than `extra`, and the old list's kept pairs of i.
+    #[inline]
+    fn partners(&self, i: usize, near: &mut Vec<u32>) {
+        let (position, radius, id, extra) = (self.position, self.radius, self.id, self.extra);
+        let old = self.old;
+        let stride = old.stride;
+        near.clear();
+        let (pi, ri) = (position[i], radius[i]);
+        let idi = id[i];
+        // Room for every candidate at once: sized run by run, the vector's
+        // bookkeeping and zero fill came nine times a particle.
+        let (runs, count, points) = self.grid.near_runs(pi);
+        near.resize(points, 0);
+        let mut len = 0;
+        for run in &runs[..count] {
+            // Whether a candidate is kept is close to a coin toss (about half
+            // have the larger id), which a branch predictor loses: write every
+            // candidate and advance past the kept ones only. 30 % off the search
+            // on the settling bed; the list is the same.
+            for &j in *run {
+                let ju = j as usize;
+                let cut = ri + radius[ju] + extra;
+                let close = (position[ju] - pi).length_squared() < cut * cut;
+                near[len] = j;
+                len += ((id[ju] > idi) & close) as usize;
+            }
+        }
+        near.truncate(len);
+        if let Some(keep) = self.keep {
+            for q in old.row_of(self.old_of_new.map_or(i, |m| m[i] as usize)) {
+                if keep(&old.history[q * stride..(q + 1) * stride]) {
+                    let j = match self.new_of_old {
+                        None => old.j[q],
+                        Some(inv) => inv[old.j[q] as usize],
+                    };
+                    near.push(j);
+                }
+            }
+            near.sort_unstable();
+            near.dedup();
+        } else {
+            near.sort_unstable();
+        }
+    }
+}
+
 impl Buffers {
     fn heap_bytes(&self) -> usize {
         let index = [&self.i, &self.j, &self.row_start];
         capacity_bytes(index, &self.history)
+    }
+
+    /// Refills the buffers for a new list of `n` rows of `stride` history values a pair,
+    /// with the partners `chunks` found, and splits them into the chunks' tasks. Every
+    /// value is left for the tasks to write, in parallel: joining the chunks' rows and
+    /// zeroing the history first were serial passes while the other thread waited.
+    fn refill(&mut self, chunks: Vec<RowChunk>, n: usize, stride: usize) -> Vec<RowTask<'_>> {
+        let total: usize = chunks.iter().map(|c| c.j.len()).sum();
+        resized(&mut self.i, total);
+        resized(&mut self.j, total);
+        resized(&mut self.row_start, n + 1);
+        resized(&mut self.history, total * stride);
+        self.row_start[0] = 0;
+        let mut tasks = Vec::with_capacity(chunks.len());
+        let (mut is, mut js) = (&mut self.i[..], &mut self.j[..]);
+        let (mut starts, mut hist) = (&mut self.row_start[1..], &mut self.history[..]);
+        let mut at = 0;
+        for (c, chunk) in chunks.into_iter().enumerate() {
+            let len = chunk.j.len();
+            let (i1, i2) = std::mem::take(&mut is).split_at_mut(len);
+            let (j1, j2) = std::mem::take(&mut js).split_at_mut(len);
+            let (s1, s2) = std::mem::take(&mut starts).split_at_mut(chunk.counts.len());
+            let (h1, h2) = std::mem::take(&mut hist).split_at_mut(len * stride);
+            (is, js, starts, hist) = (i2, j2, s2, h2);
+            tasks.push(RowTask {
+                first_row: c * CHUNK,
+                at,
+                chunk,
+                i: i1,
+                j: j1,
+                starts: s1,
+                history: h1,
+            });
+            at += len;
+        }
+        tasks
     }
 }

@@ -3,9 +3,11 @@
 //! runs it in a pass of its own, or, within [`Simulation::run`], in the step before's
 //! particle phase as soon as a chunk's second half kick is done.
 
+use super::checks::{Failure, plausible_position};
 use super::flat::{FLAT, GROUP, length_squared, load3, on_widest, repeat3, spread3, store3};
-use super::{Aabb, CHUNK, Failure, Simulation, plausible_position};
+use super::{Aabb, Simulation};
 use crate::contact::lanes::{F, LANES, map};
+use crate::neighbor::CHUNK;
 use glam::DVec3;
 
 /// What the first half kick and drift found: the largest squared displacement since the

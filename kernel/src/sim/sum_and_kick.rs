@@ -8,8 +8,8 @@
 //! same operations in the same order as one particle at a time, so the bits are the same
 //! on every path and thread count.
 
+use super::checks::plausible_motion;
 use super::flat::{FLAT, GROUP, length_squared, load3, on_widest, repeat3, spread3, store3};
-use super::plausible_motion;
 use super::wall_forces::WallOut;
 use crate::contact::lanes::{F, LANES, M, map};
 use glam::DVec3;
