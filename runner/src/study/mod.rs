@@ -5,8 +5,6 @@
 //! Each module takes its options (parsed by the CLI) and writes its files and summary.
 
 pub mod calibrate;
-pub mod calibrate_joint;
-pub mod calibrate_report;
 pub mod check;
 pub mod compare;
 pub mod diagnose;

@@ -27,8 +27,10 @@
 //!    value for every other condition.
 
 mod inputs;
+pub mod joint;
 mod outputs;
 mod refine;
+pub mod report;
 mod surface;
 
 pub(crate) use inputs::push_surface_runs;
@@ -252,7 +254,7 @@ impl<'a> Setup<'a> {
     }
 }
 
-/// `tilth calibrate`: with `--joint`, [`super::calibrate_joint::joint`]; otherwise the
+/// `tilth calibrate`: with `--joint`, [`joint::joint`]; otherwise the
 /// per-condition steps of the module's documentation, in order.
 pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
     let mut text = Vec::new();
@@ -274,7 +276,7 @@ fn calibrate_into(args: &CalibrateArgs, out: &mut dyn Write) -> Result<()> {
             );
         }
         inputs::check_counts(args)?;
-        return super::calibrate_joint::joint(args, out);
+        return joint::joint(args, out);
     }
     inputs::check_single_test(args)?;
     let setup = Setup::new(args)?;

@@ -3,7 +3,7 @@
 
 use super::surface::Solved;
 use super::{ConditionResult, Iteration, Param, Setup, describe};
-use crate::study::calibrate_report;
+use crate::study::calibrate::report as calibrate_report;
 use anyhow::Result;
 use std::io::Write;
 use tilth_tools::calibrate::{Linearised, Posterior, linearised, smc};

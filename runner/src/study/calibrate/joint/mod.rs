@@ -23,11 +23,11 @@ mod objective;
 mod report;
 
 use crate::lab::model::Model;
+use crate::study::calibrate::report as calibrate_report;
 use crate::study::calibrate::{
     CalibrateArgs, Param, cond_values, describe, load_params, push_surface_runs, run_and_read,
     run_factors, select_rows, surface, surface_grid,
 };
-use crate::study::calibrate_report;
 use crate::study::check::PairCheck;
 use crate::study::compare::{Measurement, TestSetting, experiment_text, mean_sd};
 use crate::study::measurements::TESTS;

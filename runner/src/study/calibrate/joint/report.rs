@@ -4,8 +4,8 @@
 use super::objective::Objective;
 use super::{Joint, JointIteration, JointRow, fmt};
 use crate::lab::model::{At, evaluate_at};
+use crate::study::calibrate::report as calibrate_report;
 use crate::study::calibrate::{CalibrateArgs, Param, describe, param_form};
-use crate::study::calibrate_report;
 use crate::study::compare::mean_sd;
 use anyhow::Result;
 use std::io::Write;

@@ -1,8 +1,8 @@
 //! What `tilth calibrate` writes: the posterior samples, the calibrated model file and the
 //! markdown summary.
 
-use super::calibrate::{CalibrateArgs, ConditionResult, Param, describe};
-use super::model_edit::in_bond_only;
+use super::{CalibrateArgs, ConditionResult, Param, describe};
+use crate::study::model_edit::in_bond_only;
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -545,7 +545,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("tilth-declared-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let to = dir.join("model.toml");
-        let p = super::super::calibrate::parse_param("soil-soil.friction=0.4:1.0").unwrap();
+        let p = super::super::parse_param("soil-soil.friction=0.4:1.0").unwrap();
         let rows = fixed(&[
             ("moisture_pct", 6.0),
             ("firmness_mpa", 1.55),
