@@ -26,6 +26,8 @@ VOLATILE_KEYS = {
     "elapsed_seconds", "runs_per_hour", "recorder", "mcap_bytes", "bytes",
     # The core a run was pinned to: whichever was free.
     "cores",
+    # A hash of the plan with its absolute paths: differs between two checkouts.
+    "fingerprint",
 }
 VOLATILE_COLUMNS = {"wall_seconds", "wall_s", "seconds", "mcap"}
 TEXT = (".md", ".toml", ".svg", ".html", ".txt", ".csv", ".sh", ".out")
@@ -103,13 +105,30 @@ BUILD_HASH = re.compile(r"-[0-9a-f]{16}(?=/|$)")
 
 
 def files(root):
-    """{path with build hashes masked: real relative path}."""
+    """{path with build hashes masked: [real relative paths]} (several cache entries of one
+    test mask to the same path)."""
     out = {}
     for dirpath, _, names in os.walk(root):
         for n in names:
             rel = os.path.relpath(os.path.join(dirpath, n), root)
-            out[BUILD_HASH.sub("-<build>", rel)] = rel
+            out.setdefault(BUILD_HASH.sub("-<build>", rel), []).append(rel)
     return out
+
+
+def match(old, new, olds, news, roots):
+    """Pairs each of `olds` with an equal one of `news`; the reasons of those left over."""
+    left = list(news)
+    problems = []
+    for a in olds:
+        for b in left:
+            if compare_file(os.path.join(old, a), os.path.join(new, b), roots) is None:
+                left.remove(b)
+                break
+        else:
+            b = left[0] if left else None
+            why = compare_file(os.path.join(old, a), os.path.join(new, b), roots) if b else "no counterpart"
+            problems.append(f"{a}: {why}")
+    return problems
 
 
 def main():
@@ -123,11 +142,9 @@ def main():
     problems += [f"only in {new}: {p}" for p in sorted(fb.keys() - fa.keys())]
     same = 0
     for p in sorted(fa.keys() & fb.keys()):
-        why = compare_file(os.path.join(old, fa[p]), os.path.join(new, fb[p]), roots)
-        if why:
-            problems.append(f"{p}: {why}")
-        else:
-            same += 1
+        unmatched = match(old, new, fa[p], fb[p], roots)
+        problems += unmatched
+        same += len(fa[p]) - len(unmatched)
     for p in problems:
         print(p)
     print(f"same-outputs: {same} files equal, {len(problems)} difference(s)")
