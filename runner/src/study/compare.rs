@@ -8,11 +8,8 @@
 //! reuses what is done), one sweep per test in `DIR/<test>/`. Writes `DIR/compare.json`,
 //! `compare.csv` and `compare.md`.
 
-pub use super::lab_runs::{
-    Dispatch, LabRunArgs, SetArgs, Simulate, TestSetting, condition_factors, condition_seed,
-    experiment_text, factor, observed, prefetch, run_generated, simulate,
-};
-pub use super::measurements::{Measurement, read_measurements};
+use super::lab_runs::{LabRunArgs, Simulate, simulate};
+use super::measurements::{Measurement, read_measurements};
 use super::measurements::{TESTS, check_against_model};
 use crate::lab::model::Model;
 use crate::sweep::execute;
@@ -24,7 +21,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use tilth_tools::compare as compare_stats;
 use tilth_tools::compare::plot as compare_plot;
-pub use tilth_tools::compare::{mean_sd, std_error};
+use tilth_tools::compare::{mean_sd, std_error};
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
@@ -344,7 +341,8 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
 
 #[cfg(test)]
 mod tests {
-    use super::{compare_stats, condition_seed, write_plots};
+    use super::{compare_stats, write_plots};
+    use crate::study::lab_runs::condition_seed;
     use std::collections::BTreeMap;
 
     /// The funnel test's readings have units of their own: each gets its own plots, under

@@ -17,11 +17,11 @@
 //! so the same S gives the same file. The runs are kept next to the output
 //! (`D.runs/<test>/`, resumable) unless `--work` says where.
 
-use super::compare::{LabRunArgs, Simulate, mean_sd, simulate};
 use super::measurements::{
     CONDITIONS, Measurement, check_against_model, open_csv, rows_of, write_measurements,
 };
 use crate::lab::model::Model;
+use crate::study::lab_runs::{LabRunArgs, Simulate, simulate};
 use crate::sweep::execute;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
@@ -31,6 +31,7 @@ use rand_distr::{Distribution, Normal};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use tilth_tools::compare::mean_sd;
 
 #[derive(Debug, Args)]
 pub struct SynthArgs {

@@ -4,7 +4,8 @@
 
 use super::{CalibrateArgs, Param, param_form, parse_param};
 use crate::lab::model::Model;
-use crate::study::compare::{Measurement, condition_factors, factor, read_measurements};
+use crate::study::lab_runs::{condition_factors, factor};
+use crate::study::measurements::{Measurement, read_measurements};
 use crate::sweep::plan::{Factor, PlannedRun};
 use anyhow::{Result, anyhow, bail};
 use std::collections::BTreeMap;

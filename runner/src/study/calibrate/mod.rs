@@ -39,7 +39,8 @@ pub use refine::{run_and_read, wants_more_seeds};
 pub use surface::surface;
 
 use crate::lab::model::Model;
-use crate::study::compare::{Measurement, SetArgs, experiment_text};
+use crate::study::lab_runs::{SetArgs, experiment_text};
+use crate::study::measurements::Measurement;
 use crate::sweep::execute;
 use crate::sweep::plan::Factor;
 use anyhow::{Result, anyhow, bail};

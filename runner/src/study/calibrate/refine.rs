@@ -4,7 +4,7 @@
 
 use super::surface::Solved;
 use super::{CalibrateArgs, Iteration, Setup, describe};
-use crate::study::compare::{Dispatch, mean_sd, run_generated};
+use crate::study::lab_runs::{Dispatch, run_generated};
 use crate::sweep::job::{Status, read_summary, run_dir};
 use crate::sweep::plan::{Plan, PlannedRun};
 use anyhow::{Result, bail};
@@ -13,6 +13,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use tilth_tools::calibrate::{Check, next_from_checks};
+use tilth_tools::compare::mean_sd;
 
 /// Checks every condition at its setting, all conditions together per iteration, and moves
 /// each that misses by more than `--tolerance` %, up to `--refine` times. Returns each

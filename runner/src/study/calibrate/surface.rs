@@ -5,7 +5,7 @@
 use super::refine::run_plan;
 use super::{Param, Setup, describe, param_form, push_surface_runs, surface_grid};
 use crate::lab::model::{At, evaluate_at};
-use crate::study::compare::Measurement;
+use crate::study::measurements::Measurement;
 use crate::sweep::plan::{Plan, PlannedRun};
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;

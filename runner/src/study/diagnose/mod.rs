@@ -15,10 +15,10 @@
 //! `DIR/diagnosis.md`, the ranking in words.
 
 use super::calibrate::{Param, parse_param};
-use super::compare::LabRunArgs;
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use super::model_edit::values_of;
 use crate::lab::model::Model;
+use crate::study::lab_runs::LabRunArgs;
 use anyhow::{Result, bail};
 use clap::Args;
 use serde::Serialize;

@@ -2,13 +2,14 @@
 //! of them.
 
 use super::{DiagnoseArgs, Inputs};
-use crate::study::compare::{Simulate, TestSetting, mean_sd, prefetch, simulate, std_error};
+use crate::study::lab_runs::{Simulate, TestSetting, prefetch, simulate};
 use crate::study::measurements::Measurement;
 use crate::study::model_edit::{add_to, switch_on, variant};
 use crate::sweep::execute;
 use anyhow::{Result, bail};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use tilth_tools::compare::{mean_sd, std_error};
 
 /// One variant of the model: its name (its runs go to `DIR/runs/<name>/`), its model file in
 /// `DIR/models/`, and the step it is raised by from the base, the `h` of its finite

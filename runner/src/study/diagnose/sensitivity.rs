@@ -2,9 +2,9 @@
 //! standard error, and the noise of the sensitivities from the seeds.
 
 use super::runs::{Simulations, Variant};
-use crate::study::compare::mean_sd;
 use crate::study::measurements::Measurement;
 use nalgebra::DMatrix;
+use tilth_tools::compare::mean_sd;
 use tilth_tools::diagnose::{Candidate, JacobianNoise};
 
 /// Finite differences of the variants against "base-fd" (variant 1), paired by seed, over

@@ -7,7 +7,7 @@ use super::params::show;
 use super::rmse;
 use super::simulations::{Evaluated, Problem, Sims, at, residuals};
 use super::stop::{Stop, at_noise, noise_gain, predicted_gain};
-use crate::study::compare::{Simulate, prefetch};
+use crate::study::lab_runs::{Simulate, prefetch};
 use anyhow::{Result, anyhow};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;

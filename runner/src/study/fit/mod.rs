@@ -42,9 +42,9 @@ mod params;
 mod simulations;
 mod stop;
 
-use super::compare::LabRunArgs;
 use super::measurements::{Measurement, check_against_model, read_measurements};
 use crate::lab::model::Model;
+use crate::study::lab_runs::LabRunArgs;
 use crate::sweep::execute;
 use anyhow::{Context, Result, bail};
 use clap::Args;

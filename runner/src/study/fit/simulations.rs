@@ -4,13 +4,14 @@
 use super::FitArgs;
 use super::params::{FreeParam, apply, show};
 use crate::lab::model::Model;
-use crate::study::compare::{Simulate, TestSetting, mean_sd, simulate, std_error};
+use crate::study::lab_runs::{Simulate, TestSetting, simulate};
 use crate::study::measurements::Measurement;
 use crate::study::model_edit::variant;
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use tilth_tools::compare::{mean_sd, std_error};
 
 /// What every setting of one fit shares: the command's arguments, the starting model, the
 /// measured rows and the free parameters, and where the settings' files go.

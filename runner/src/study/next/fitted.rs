@@ -5,14 +5,15 @@
 //! rival several steps strong predicts what it predicts.
 
 use super::{NextArgs, Suggestion, group};
-use crate::study::compare::{Simulate, mean_sd, prefetch, simulate};
 use crate::study::diagnose::file::DiagnosisFile;
+use crate::study::lab_runs::{Simulate, prefetch, simulate};
 use crate::study::measurements::Measurement;
 use crate::study::synth::Noise;
 use crate::sweep::execute;
 use anyhow::Result;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use tilth_tools::compare::mean_sd;
 use tilth_tools::diagnose::discriminate::{Fitted, fitted_separations};
 
 /// The rival that stands for "no effect": the free parameters' own fit.

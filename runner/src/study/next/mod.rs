@@ -17,10 +17,10 @@
 //! `NEXT/next.md` and `NEXT/conditions.csv`, the `--top` best as a conditions file for the
 //! lab or for `tilth synth --conditions`.
 
-use super::compare::{LabRunArgs, Simulate, mean_sd, prefetch, simulate};
 use super::measurements::{Measurement, check_against_model, observables_of, open_csv};
 use super::synth::{Noise, parse_noise, read_conditions};
 use crate::lab::model::Model;
+use crate::study::lab_runs::{LabRunArgs, Simulate, prefetch, simulate};
 use crate::sweep::execute;
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -29,6 +29,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use tilth_tools::compare::mean_sd;
 use tilth_tools::diagnose::discriminate::{Rows, Separation, separations, worst};
 use tilth_tools::diagnose::verdict::Kind;
 

@@ -29,7 +29,8 @@ use crate::study::calibrate::{
     run_factors, select_rows, surface, surface_grid,
 };
 use crate::study::check::PairCheck;
-use crate::study::compare::{Measurement, TestSetting, experiment_text, mean_sd};
+use crate::study::lab_runs::{TestSetting, experiment_text};
+use crate::study::measurements::Measurement;
 use crate::study::measurements::TESTS;
 use crate::sweep::execute;
 use crate::sweep::plan::{Plan, PlannedRun};
@@ -43,6 +44,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use tilth_tools::calibrate::{Linearised, Posterior, linearised, minimise_in_box, smc};
+use tilth_tools::compare::mean_sd;
 use tilth_tools::rsm::Anova;
 
 /// One measurement's response surface: the measurement, the fitted surface, the points it was

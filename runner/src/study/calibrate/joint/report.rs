@@ -6,10 +6,10 @@ use super::{Joint, JointIteration, JointRow, fmt};
 use crate::lab::model::{At, evaluate_at};
 use crate::study::calibrate::report as calibrate_report;
 use crate::study::calibrate::{CalibrateArgs, Param, describe, param_form};
-use crate::study::compare::mean_sd;
 use anyhow::Result;
 use std::io::Write;
 use tilth_tools::calibrate::{Linearised, Posterior};
+use tilth_tools::compare::mean_sd;
 
 impl Joint<'_> {
     /// Writes `DIR/model.toml` (each parameter its one calibrated value), `calibration.json`
