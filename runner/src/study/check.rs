@@ -157,9 +157,7 @@ pub fn describe(pairs: &[PairCheck]) -> String {
 }
 
 pub fn check(args: &CheckArgs) -> Result<String> {
-    let mut text = Vec::new();
-    check_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| check_into(args, out))
 }
 
 /// [`check`], writing its summary to `out`.

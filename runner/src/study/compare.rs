@@ -70,9 +70,7 @@ pub struct Compared {
 }
 
 pub fn compare(args: &CompareArgs) -> Result<String> {
-    let mut text = Vec::new();
-    compare_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| compare_into(args, out))
 }
 
 /// [`compare`], writing its summary to `out`.

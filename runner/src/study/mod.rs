@@ -17,3 +17,12 @@ pub mod project_report;
 pub mod project_story;
 pub mod rsm_plot;
 pub mod synth;
+
+/// What `write` writes, as text: a command's summary, returned for the CLI to print.
+fn summary(
+    write: impl FnOnce(&mut dyn std::io::Write) -> anyhow::Result<()>,
+) -> anyhow::Result<String> {
+    let mut text = Vec::new();
+    write(&mut text)?;
+    Ok(String::from_utf8(text)?)
+}

@@ -45,9 +45,7 @@ fn escape(s: &str) -> String {
 }
 
 pub fn report(args: &ReportArgs) -> Result<String> {
-    let mut text = Vec::new();
-    report_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| report_into(args, out))
 }
 
 /// [`report`], writing its summary to `out`.

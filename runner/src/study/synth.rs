@@ -224,9 +224,7 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
 }
 
 pub fn synth(args: &SynthArgs) -> Result<String> {
-    let mut text = Vec::new();
-    synth_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| synth_into(args, out))
 }
 
 /// [`synth`], writing its summary to `out`.

@@ -258,9 +258,7 @@ impl<'a> Setup<'a> {
 /// `tilth calibrate`: with `--joint`, [`joint::joint`]; otherwise the
 /// per-condition steps of the module's documentation, in order.
 pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
-    let mut text = Vec::new();
-    calibrate_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| calibrate_into(args, out))
 }
 
 /// [`calibrate`], writing its summary to `out`.

@@ -502,9 +502,7 @@ fn write_report(
 }
 
 pub fn diagnose(args: &DiagnoseArgs) -> Result<String> {
-    let mut text = Vec::new();
-    diagnose_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| diagnose_into(args, out))
 }
 
 /// [`diagnose`], writing its summary to `out`.

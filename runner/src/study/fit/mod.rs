@@ -94,9 +94,7 @@ pub struct FitArgs {
 /// `tilth fit`: checks the inputs, fits the free parameters by Levenberg-Marquardt on
 /// simulations, and writes the fitted model and the report (see the module docs).
 pub fn fit(args: &FitArgs) -> Result<String> {
-    let mut text = Vec::new();
-    fit_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| fit_into(args, out))
 }
 
 /// [`fit`], writing its summary to `out`.

@@ -91,9 +91,7 @@ struct Variant {
 }
 
 pub fn next(args: &NextArgs) -> Result<String> {
-    let mut text = Vec::new();
-    next_into(args, &mut text)?;
-    Ok(String::from_utf8(text)?)
+    crate::study::summary(|out| next_into(args, out))
 }
 
 /// [`next`], writing its summary to `out`.
