@@ -67,7 +67,7 @@ pub fn run(args: &RunArgs, out: &mut dyn Write) -> Result<()> {
 
 /// `tilth run EXPERIMENT`: one run through the sweep machinery (pinned core, MCAP, summary).
 fn run_experiment(args: &RunArgs, file: &std::path::Path, out: &mut dyn Write) -> Result<()> {
-    let (run, status) = single::run_experiment(
+    let run = single::run_experiment(
         file,
         args.coarse,
         args.threads,
@@ -99,5 +99,5 @@ fn run_experiment(args: &RunArgs, file: &std::path::Path, out: &mut dyn Write) -
             )?;
         }
     }
-    status
+    run.status
 }

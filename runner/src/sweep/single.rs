@@ -83,18 +83,19 @@ pub struct ExperimentRun {
     pub summary: Option<RunSummary>,
     /// Whether it ran now (false: found done in `dir`).
     pub ran: bool,
+    /// `Err` when the run failed or was interrupted (its files are written either way, so
+    /// they can be reported before the error).
+    pub status: Result<()>,
 }
 
 /// Runs the experiment `file` as a sweep of one run into `out` (default `runs/<name>`).
-/// Returns the run and its status: `Err` when it failed or was interrupted (its files are
-/// written either way, so the caller can report them before the error).
 pub fn run_experiment(
     file: &Path,
     coarse: bool,
     threads: Option<u64>,
     out: Option<PathBuf>,
     show_progress: bool,
-) -> Result<(ExperimentRun, Result<()>)> {
+) -> Result<ExperimentRun> {
     let mut plan = super::Plan::single(file, coarse)?;
     if let Some(t) = threads {
         plan.threads = t as usize;
@@ -122,12 +123,12 @@ pub fn run_experiment(
             row.error.clone().unwrap_or_else(|| "the run failed".into())
         )),
     };
-    let run = ExperimentRun {
+    Ok(ExperimentRun {
         origin: plan.origin.clone(),
         title: plan.title.clone(),
         dir,
         summary,
         ran: outcome.ran > 0,
-    };
-    Ok((run, status))
+        status,
+    })
 }
