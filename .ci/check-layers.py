@@ -5,7 +5,9 @@
    or a lower layer, as LAYERS lists them; no cycle between top-level modules of any crate.
    Crates are layered by Cargo itself (it refuses cycles); `runner/` nests its layers as
    modules of the `tilth` crate, so that order is checked here.
-2. Sizes: no non-test `.rs` file over 600 lines (outside `#[cfg(test)]` modules) and no
+2. A thin CLI: the modules under THIN_CLI parse and print; they read and write no files
+   (`std::fs`, `File`, `OpenOptions`), which is the library's work.
+3. Sizes: no non-test `.rs` file over 600 lines (outside `#[cfg(test)]` modules) and no
    function over 120 lines outside tests. Test code (tests/ directories, `tests.rs` files,
    `#[cfg(test)]` modules) is exempt.
 
@@ -19,11 +21,13 @@ import sys
 
 MAX_FILE_LINES = 600
 MAX_FN_LINES = 120
+THIN_CLI = "runner/src/cli"
+FILE_IO = re.compile(r"\bstd::fs\b|\bfs::|\bFile::|\bOpenOptions\b")
 
 # Lowest layer first. A module may depend on its own layer and any layer below it.
 LAYERS = {
     "runner/src": [
-        {"memory", "progress", "provenance"},
+        {"memory", "progress", "provenance", "text"},
         {"config"},
         {"lab"},
         {"record", "sweep"},
@@ -233,6 +237,19 @@ def size_problems(root):
     return problems
 
 
+def cli_problems():
+    problems = []
+    for path in rust_files(THIN_CLI):
+        rel = os.path.relpath(path)
+        text = blank(open(path, encoding="utf-8").read())
+        for m in FILE_IO.finditer(text):
+            problems.append(
+                f"{rel}:{line_of(text, m.start())}: file I/O in the CLI "
+                f"(`{m.group(0)}`): move it into the library function the command calls"
+            )
+    return problems
+
+
 def main():
     os.chdir(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
     problems = []
@@ -250,6 +267,7 @@ def main():
             problems.append(f"{root}: import cycle between {', '.join(comp)}: {detail}")
         problems += layer_problems(root, edges)
         problems += size_problems(root)
+    problems += cli_problems()
     for p in problems:
         print(p)
     print(f"check-layers: {len(problems)} problem(s)")

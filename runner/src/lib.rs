@@ -21,6 +21,7 @@ pub mod provenance;
 pub mod record;
 pub mod study;
 pub mod sweep;
+pub mod text;
 
 use tilth_kernel::KernelError;
 

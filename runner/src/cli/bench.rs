@@ -1,7 +1,9 @@
 //! `tilth bench settling-bed`: the kernel's speed benchmark
-//! (tools/bench/settling-bed/README.md); the scene is `lab::settling_bed`.
+//! (tools/bench/settling-bed/README.md); the scene is `lab::settling_bed`, the run and its
+//! report `sweep::bench`.
 
 use crate::lab::settling_bed::{self, SettlingBed};
+use crate::sweep::bench;
 use anyhow::Result;
 use clap::{Args, Subcommand, ValueEnum};
 use std::io::Write;
@@ -91,81 +93,20 @@ impl From<Cohesion> for settling_bed::Cohesion {
 }
 
 pub fn bench(which: &Bench, out: &mut dyn Write) -> Result<()> {
-    match which {
-        Bench::SettlingBed(args) => settling_bed(args, out),
-    }
-}
-
-/// The benchmark scene.
-fn settling_bed(args: &SettlingBedArgs, out: &mut dyn Write) -> Result<()> {
-    let bed = SettlingBed {
-        particles: args.particles,
-        threads: args.threads,
-        seed: args.seed,
-        cohesion: args.cohesion.into(),
+    let text = match which {
+        Bench::SettlingBed(args) => bench::settling_bed(&bench::SettlingBedRun {
+            bed: SettlingBed {
+                particles: args.particles,
+                threads: args.threads,
+                seed: args.seed,
+                cohesion: args.cohesion.into(),
+            },
+            steps: args.steps,
+            pair_path: args.pair_path.into(),
+            show_progress: !args.quiet,
+            pair_phase_reps: args.pair_phase_reps,
+        })?,
     };
-    let run = settling_bed::run_timed(&bed, args.steps, args.pair_path.into(), !args.quiet)?;
-    let (mut sim, setup, secs) = (run.sim, run.setup_seconds, run.stepping_seconds);
-    let n = sim.particles.len();
-    let n_div = n.max(1) as f64;
-    writeln!(out, "particles: {n}")?;
-    writeln!(out, "steps: {}", sim.step)?;
-    writeln!(out, "threads: {}", args.threads)?;
-    writeln!(out, "setup seconds: {setup:.3}")?;
-    writeln!(out, "wall seconds: {secs:.3}")?;
-    // As LIGGGHTS's "Pair / Neigh / Other time (%)" after its loop.
-    writeln!(out, "time per part of the stepping loop:")?;
-    let parts = crate::sweep::report::time_breakdown(&run.times, secs);
-    crate::sweep::report::write_time_breakdown(out, &parts, "  ")?;
-    writeln!(out, "neighbour rebuilds: {}", sim.rebuilds)?;
-    let (touching, _) = sim.contact_counts();
-    writeln!(
-        out,
-        "pairs at the end: {} listed, {touching} carrying force",
-        sim.pair_count()
-    )?;
-    writeln!(
-        out,
-        "final kinetic energy: {:.4e} J",
-        sim.particles.kinetic_energy()
-    )?;
-    // The bits of the final state: equal on 1 and 2 threads, and a check that a change
-    // meant to be pure speed changed nothing.
-    writeln!(out, "state hash: {:016x}", sim.state_hash())?;
-    writeln!(
-        out,
-        "heap bytes per particle: {:.0}",
-        sim.heap_bytes() as f64 / n_div
-    )?;
-    match peak_rss_kb() {
-        Some(kb) => writeln!(
-            out,
-            "peak RSS per particle: {:.3} kB ({kb} kB total)",
-            kb as f64 / n_div
-        )?,
-        None => writeln!(out, "peak RSS per particle: unknown (no /proc/self/status)")?,
-    }
-    if args.pair_phase_reps > 0 {
-        let t = sim.time_pair_phase(args.pair_phase_reps) / args.pair_phase_reps as f64;
-        writeln!(
-            out,
-            "pair phase alone: {:.3} ms per step, {:.2} ns per listed pair, {:.2} ns per pair carrying force",
-            t * 1e3,
-            t * 1e9 / sim.pair_count().max(1) as f64,
-            t * 1e9 / touching.max(1) as f64
-        )?;
-    }
-    writeln!(
-        out,
-        "particle-steps/s: {:.3e}",
-        n as f64 * sim.step as f64 / secs.max(1e-12)
-    )?;
+    out.write_all(text.as_bytes())?;
     Ok(())
-}
-
-/// VmHWM (peak resident set) in kB, from /proc/self/status.
-fn peak_rss_kb() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
 }

@@ -1,15 +1,15 @@
-//! The command-line surface: one file per command that parses its arguments, calls the
-//! library and prints.
+//! The command-line surface: the `tilth` commands and their arguments. Each command calls
+//! one library function and prints what it returns (`sweep` and `rsm` have subcommands,
+//! `bench` its benchmarks, in files of their own).
 
-use crate::study::{calibrate, check, compare, diagnose, fit, next, project_report, synth};
+use crate::study::{calibrate, check, compare, diagnose, fit, next, project_report, reduce, synth};
 mod bench;
 mod laws;
-mod reduce;
 mod rsm;
-mod rsm_print;
-mod run;
 mod sweep;
 
+use crate::sweep::single;
+use crate::text::Ended;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -25,7 +25,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run a scene file (TOML) and print a summary; without FILE, run the embedded demo.
-    Run(run::RunArgs),
+    Run(single::RunArgs),
     /// List every contact law: slot, parameters with units, ranges and defaults.
     Laws,
     /// Parameter sweeps: plan, run (pinned cores, one MCAP per run, resumable), status, Slurm.
@@ -73,14 +73,19 @@ pub enum Command {
 /// Runs the parsed command, writing results to `out` (progress and warnings go to stderr).
 pub fn execute(cli: Cli, out: &mut dyn Write) -> Result<()> {
     match cli.command {
-        Command::Run(args) => run::run(&args, out),
+        Command::Run(args) => {
+            // A run's files are reported whether or not it finished.
+            let Ended { text, end } = single::run(&args)?;
+            print(out, text)?;
+            end
+        }
         Command::Laws => laws::laws(out),
         Command::Bench { which } => bench::bench(&which, out),
         Command::Sweep { command } => sweep::sweep(&command, out),
-        Command::Reduce(args) => reduce::reduce_cmd(&args, out),
+        Command::Reduce(args) => print(out, reduce::reduce(&args)?),
         Command::Compare(args) => print(out, compare::compare(&args)?),
         Command::Check(args) => print(out, check::check(&args)?),
-        Command::Rsm { command } => rsm::rsm(&command, out),
+        Command::Rsm { command } => print(out, rsm::rsm(&command)?),
         Command::Calibrate(args) => print(out, calibrate::calibrate(&args)?),
         Command::Synth(args) => print(out, synth::synth(&args)?),
         Command::Report(args) => print(out, project_report::report(&args)?),

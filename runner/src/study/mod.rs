@@ -1,7 +1,7 @@
 //! The study: algorithms over runs and measurements. Compare a model with measured rows,
 //! diagnose which candidate effect its misfit calls for, fit free parameters and effect
 //! strengths, calibrate against one test or all, make synthetic data, plan the next
-//! measurement, fit response surfaces, and gather a project's history into a report.
+//! measurement, fit response surfaces (`rsm`), and gather a project's history into a report.
 //! Each module takes its options (parsed by the CLI) and writes its files and summary.
 
 pub mod calibrate;
@@ -15,14 +15,8 @@ pub mod model_edit;
 pub mod next;
 pub mod project_report;
 pub mod project_story;
-pub mod rsm_plot;
+pub mod reduce;
+pub mod rsm;
 pub mod synth;
 
-/// What `write` writes, as text: a command's summary, returned for the CLI to print.
-fn summary(
-    write: impl FnOnce(&mut dyn std::io::Write) -> anyhow::Result<()>,
-) -> anyhow::Result<String> {
-    let mut text = Vec::new();
-    write(&mut text)?;
-    Ok(String::from_utf8(text)?)
-}
+use crate::text::summary;

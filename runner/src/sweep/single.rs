@@ -7,10 +7,117 @@ use super::job::{RunSummary, Status, read_summary, run_dir};
 use super::report::{RunCost, RunReport, Sample};
 use crate::config;
 use crate::progress::Progress;
+use crate::text::{Ended, summary};
 use anyhow::{Context, Result};
+use clap::Args;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use tilth_kernel::sim::INSERT_EVERY;
+
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Scene file (TOML); the embedded scene (sweeps/scenes/pile.toml) when omitted.
+    pub file: Option<PathBuf>,
+    /// Worker threads (overrides simulation.threads; results do not depend on it).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub threads: Option<u64>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Experiment files: the output directory for run.mcap and summary.json
+    /// (default `runs/<file stem>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Experiment files: use the test's coarse preset (bigger particles, less material;
+    /// under a minute).
+    #[arg(long)]
+    pub coarse: bool,
+}
+
+/// `tilth run [FILE]`: a scene file stepped here, an experiment file as a sweep of one run;
+/// the summary as text or JSON.
+pub fn run(args: &RunArgs) -> Result<Ended> {
+    if let Some(file) = &args.file {
+        let text = std::fs::read_to_string(file)
+            .with_context(|| format!("{}: cannot read", file.display()))?;
+        let is_experiment = toml::from_str::<toml::Value>(&text)
+            .is_ok_and(|v| crate::lab::experiment::is_experiment(&v));
+        if is_experiment {
+            return experiment(args, file);
+        }
+    }
+    if args.coarse || args.out.is_some() {
+        anyhow::bail!("--coarse and --out are for experiment files (experiment = \"...\")");
+    }
+    let t0 = Instant::now();
+    let loaded = config::load_or_demo(args.file.as_ref(), args.threads.map(|t| t as usize))?;
+    let setup_seconds = t0.elapsed().as_secs_f64();
+    for w in &loaded.sim.warnings {
+        eprintln!("warning: {}: {w}", loaded.info.origin);
+    }
+    let shown = loaded.sim.warnings.len();
+    let report = run_scene(loaded, !args.quiet, setup_seconds)?;
+    for w in report.warnings.iter().skip(shown) {
+        eprintln!("warning: {}: {w}", report.scene);
+    }
+    let text = summary(|out| {
+        if args.json {
+            serde_json::to_writer_pretty(&mut *out, &report)?;
+            writeln!(out)?;
+        } else {
+            report.write_text(out)?;
+        }
+        Ok(())
+    })?;
+    Ok(Ended { text, end: Ok(()) })
+}
+
+/// `tilth run EXPERIMENT`: one run through the sweep machinery (pinned core, MCAP, summary).
+fn experiment(args: &RunArgs, file: &Path) -> Result<Ended> {
+    let run = run_experiment(
+        file,
+        args.coarse,
+        args.threads,
+        args.out.clone(),
+        !args.quiet,
+    )?;
+    let text = summary(|out| {
+        if args.json {
+            let v = run
+                .summary
+                .as_ref()
+                .map(serde_json::to_value)
+                .transpose()?
+                .unwrap_or(serde_json::Value::Null);
+            serde_json::to_writer_pretty(&mut *out, &v)?;
+            writeln!(out)?;
+        } else if let Some(s) = &run.summary {
+            writeln!(out, "experiment   {} ({})", run.origin, run.title)?;
+            writeln!(out, "status       {}", s.status.as_str())?;
+            writeln!(out, "wall time    {:.1} s", s.wall_seconds)?;
+            if let Some(x) = &s.experiment {
+                writeln!(out, "results      {}", serde_json::to_string_pretty(x)?)?;
+            }
+            writeln!(out, "files        {}", run_dir(&run.dir, 1).display())?;
+            if !run.ran {
+                writeln!(
+                    out,
+                    "(already done in {}; delete it to run again)",
+                    run.dir.display()
+                )?;
+            }
+        }
+        Ok(())
+    })?;
+    Ok(Ended {
+        text,
+        end: run.status,
+    })
+}
 
 /// Steps the loaded scene to the end, recording samples; a kernel failure comes back as
 /// the error (with the scene's name).

@@ -36,7 +36,7 @@ pub(super) fn condition_result(
     let (lin, post) = uncertainty(&fit, m.value, &last.setting, params, c);
     std::fs::create_dir_all(&args.out)?;
     // Per-condition files: posterior-SLUG.csv, curve-SLUG.svg, contour-SLUG.svg.
-    let slug = crate::study::rsm_plot::slug(&describe(&conds));
+    let slug = crate::study::rsm::plot::slug(&describe(&conds));
     let file = |kind: &str, ext: &str| args.out.join(format!("{kind}-{slug}.{ext}"));
     calibrate_report::write_samples(&file("posterior", "csv"), params, &post)?;
     let marks = vec![

@@ -1,5 +1,6 @@
-//! `tilth reduce repose|shear|ucs FILES... [--json] [--plot DIR]`: MCAP -> the study's numbers
-//! (the work is in `tilth_tools::reduce`).
+//! `tilth reduce repose|shear|ucs FILES... [--json] [--plot DIR]`: MCAP -> the study's numbers,
+//! a plot per file, and Mohr-Coulomb over several shear files (the reducers are in
+//! `tilth_tools::reduce`).
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
@@ -50,7 +51,12 @@ fn svg_path(file: &Path, dir: Option<&PathBuf>, what: &str) -> PathBuf {
     }
 }
 
-pub fn reduce_cmd(args: &ReduceArgs, out: &mut dyn Write) -> Result<()> {
+/// Reduces each file, writes its plot, and returns the summary: a line per file (or JSON).
+pub fn reduce(args: &ReduceArgs) -> Result<String> {
+    super::summary(|out| write_reduce(args, out))
+}
+
+fn write_reduce(args: &ReduceArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(d) = &args.plot {
         std::fs::create_dir_all(d).with_context(|| format!("{}: cannot create", d.display()))?;
     }
