@@ -10,7 +10,6 @@ use crate::progress::Progress;
 use crate::text::{Ended, summary};
 use anyhow::{Context, Result};
 use clap::Args;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use tilth_kernel::sim::INSERT_EVERY;
