@@ -55,6 +55,12 @@ pub struct ShearParams {
     /// Longest any preparation phase may take, s.
     #[serde(default = "default_phase_time")]
     pub max_phase_time: f64,
+    /// Whether bonds form after compaction (the study's firm soil, its bonds from the
+    /// model's `[bond]`). `false` shears the compacted specimen without bonds, as a
+    /// remoulded soil is sheared (ASTM D3080): its strength is then the contacts' own
+    /// friction, rolling resistance and adhesion, which the bonds otherwise hide.
+    #[serde(default = "default_bonded")]
+    pub bonded: bool,
 }
 
 fn default_box() -> f64 {
@@ -86,6 +92,9 @@ fn default_inertial() -> f64 {
 fn default_phase_time() -> f64 {
     2.0
 }
+fn default_bonded() -> bool {
+    true
+}
 
 impl Default for ShearParams {
     fn default() -> Self {
@@ -106,7 +115,8 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         compaction: p.compaction_force / area,
         test: p.normal_pressure,
     };
-    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
+    let (steps, count) =
+        specimen::particles_for(c, &mix, area * p.height, p.packing, loads, p.bonded)?;
     let parts = c.model.scene_parts(c.at(), true)?;
     let r = 0.5 * p.box_diameter;
     // Loose particles need about twice the specimen's height; the platen starts above that.
@@ -135,7 +145,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
     );
     Ok(Built {
         scene: scene::to_value(&scene)?,
-        bonded_dt: Some(steps.bonded),
+        bonded_dt: p.bonded.then_some(steps.bonded),
         protocol: Box::new(ShearProtocol::new(p, box_walls, prep, area, speed, d, rho)),
     })
 }
@@ -380,8 +390,12 @@ impl Protocol for ShearProtocol {
         match self.phase {
             Phase::Prepare => {
                 if self.prep.advance(sim, "direct_shear")? {
-                    self.bonds = self.prep.bond(sim)?;
-                    if self.bonds == 0 {
+                    self.bonds = if self.p.bonded {
+                        self.prep.bond(sim)?
+                    } else {
+                        self.prep.unbonded(sim)?
+                    };
+                    if self.bonds == 0 && self.p.bonded {
                         bail!(
                             "direct_shear: no bonds formed after compaction (step {}): the particles do not touch",
                             sim.step

@@ -99,10 +99,11 @@ pub struct Steps {
     /// time, at most the step a packing stands under the compaction pressure
     /// ([`loaded_steps`]).
     pub prepare: f64,
-    /// From the moment bonds form: the smaller of that, the step a packing stands under the
-    /// test's pressure, and [`BOND_DT_FRACTION`] of the stiffest bond's time scale. Stiff
-    /// bonds need a step ten or more times shorter than the contacts; preparing at the
-    /// bonds' step spent most of a run on unbonded grains.
+    /// From the moment bonds form (or, in a test without bonds, from the end of the
+    /// compaction): the smaller of that, the step a packing stands under the test's
+    /// pressure, and, if bonds form, [`BOND_DT_FRACTION`] of the stiffest bond's time scale.
+    /// Stiff bonds need a step ten or more times shorter than the contacts; preparing at
+    /// the bonds' step spent most of a run on unbonded grains.
     pub bonded: f64,
 }
 
@@ -123,12 +124,14 @@ pub struct Loads {
 /// 49 N at a solid fraction of 0.735 with bonds that broke at once, frictionless grains 43 N,
 /// and the same specimen at 10 % 111 N at 0.57 (docs/li2022-statistics.md, "The shear box
 /// checked"); the kernel's test tests/tests/loaded_packing.rs shows it on 600 grains.
+/// `bonds`: whether bonds will form (their stiffness then limits the step).
 pub fn particles_for(
     c: &Common,
     mix: &SizeMix,
     volume: f64,
     packing: f64,
     loads: Loads,
+    bonds: bool,
 ) -> Result<(Steps, usize)> {
     let d = mix.min_diameter();
     let steps = match c.sim.dt {
@@ -139,11 +142,14 @@ pub fn particles_for(
         None => {
             let (compaction, test) = loaded_steps(c, d, packing, loads)?;
             let prepare = (c.sim.dt_fraction * rayleigh_time(c.model, d)?).min(compaction);
+            let loaded = prepare.min(test);
             Steps {
                 prepare,
-                bonded: prepare
-                    .min(test)
-                    .min(bond_time_scale(c, d)? * BOND_DT_FRACTION),
+                bonded: if bonds {
+                    loaded.min(bond_time_scale(c, d)? * BOND_DT_FRACTION)
+                } else {
+                    loaded
+                },
             }
         }
     };
@@ -307,6 +313,13 @@ impl Preparation {
     pub fn bond(&self, sim: &mut Simulation) -> Result<usize> {
         sim.set_dt(self.bonded_dt)?;
         Ok(sim.form_bonds())
+    }
+
+    /// Ends the preparation of a specimen without bonds: switches to the step of the loaded
+    /// specimen. Returns 0, the bonds formed.
+    pub fn unbonded(&self, sim: &mut Simulation) -> Result<usize> {
+        sim.set_dt(self.bonded_dt)?;
+        Ok(0)
     }
 
     /// Advances the preparation; errors when a phase cannot finish.

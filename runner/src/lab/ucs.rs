@@ -107,7 +107,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
         compaction: p.compaction_force / area,
         test: p.reference_stress,
     };
-    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads)?;
+    let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads, true)?;
     let parts = c.model.scene_parts(c.at(), true)?;
     let z_fill = 2.4 * p.height / (p.packing / 0.55);
     let z_top = z_fill + 2.0 * d;

@@ -352,3 +352,59 @@ fn the_funnel_skin_changes_the_rebuilds_not_the_bits() {
     assert_eq!(funnel["reduced"], usual["reduced"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The coarse direct shear test of a remoulded specimen (`bonded = false`) at `pressure` Pa:
+/// the experiment's part of its summary.
+fn unbonded_shear(pressure: f64) -> serde_json::Value {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let preset =
+        std::fs::read_to_string(root.join("sweeps/experiments/direct_shear.toml")).unwrap();
+    let model = root.join("models/li2022.toml").canonicalize().unwrap();
+    let text = preset
+        .replace(
+            "model = \"../../models/li2022.toml\"",
+            &format!("model = {:?}", model.display().to_string()),
+        )
+        .replace(
+            "experiment = \"direct_shear\"",
+            "experiment = \"direct_shear\"\ncoarse = true",
+        )
+        .replace(
+            "normal_pressure = 1.0e5",
+            &format!("normal_pressure = {pressure:e}\nbonded = false\n#"),
+        );
+    assert!(
+        text.contains("bonded = false") && text.contains("coarse = true"),
+        "the preset's lines moved"
+    );
+    let dir =
+        std::env::temp_dir().join(format!("tilth-unbonded-{pressure}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("shear.toml");
+    std::fs::write(&file, text).unwrap();
+    let e = experiment_summary(&file, &dir.join("out"));
+    let _ = std::fs::remove_dir_all(&dir);
+    e
+}
+
+/// Without bonds the specimen's strength is its contacts' friction: no bond forms, and the
+/// shear force at a four times higher normal pressure is higher. (Coulomb: tau = c + sigma
+/// tan phi with tan phi > 0; at 25 and 100 kPa with the soil's sliding friction of 0.8 the
+/// two differ by tens of newtons, where seeds move a coarse reading by a few.)
+#[test]
+fn an_unbonded_shear_specimen_is_held_by_friction_alone() {
+    let low = unbonded_shear(2.5e4);
+    let high = unbonded_shear(1.0e5);
+    for e in [&low, &high] {
+        assert_eq!(e["bonds_formed"], 0, "{e}");
+        assert_eq!(e["completed"], true, "{e}");
+    }
+    let force = |e: &serde_json::Value| e["peak_shear_force_n"].as_f64().unwrap();
+    assert!(
+        force(&high) > force(&low) && force(&low) > 0.0,
+        "peak shear force {} N at 25 kPa, {} N at 100 kPa",
+        force(&low),
+        force(&high)
+    );
+}
