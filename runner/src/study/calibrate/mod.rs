@@ -131,6 +131,16 @@ pub struct Param {
     pub high: f64,
 }
 
+/// The free parameters with their ranges, as the reports list them:
+/// `soil-soil.rolling_friction in [0.05, 0.45], ...`.
+pub fn params_text(params: &[Param]) -> String {
+    params
+        .iter()
+        .map(|p| format!("{}.{} in [{}, {}]", p.pair, p.key, p.low, p.high))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// A free parameter's value form in the model: `[pairs.PAIR]` first, then
 /// `[bond.pairs.PAIR]` (bond stiffness and strength, for the direct shear and UCS tests). The
 /// lab puts both into the scene's pair table, which is where the runs set it.

@@ -1,7 +1,7 @@
 //! What `tilth calibrate` writes: the posterior samples, the calibrated model file and the
 //! markdown summary.
 
-use super::{CalibrateArgs, ConditionResult, Param, describe};
+use super::{CalibrateArgs, ConditionResult, Param, describe, params_text};
 use crate::study::model_edit::in_bond_only;
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, BTreeSet};
@@ -310,11 +310,7 @@ pub fn markdown(args: &CalibrateArgs, params: &[Param], rows: &[ConditionResult]
         args.test,
         args.data.display(),
         params.len(),
-        params
-            .iter()
-            .map(|p| format!("{}.{} in [{}, {}]", p.pair, p.key, p.low, p.high))
-            .collect::<Vec<_>>()
-            .join(", "),
+        params_text(params),
         args.seeds,
         args.check_seeds.unwrap_or(args.seeds),
         match args.check_se {

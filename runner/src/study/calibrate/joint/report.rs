@@ -5,7 +5,7 @@ use super::objective::Objective;
 use super::{Joint, JointIteration, JointRow, fmt};
 use crate::lab::model::{At, evaluate_at};
 use crate::study::calibrate::report as calibrate_report;
-use crate::study::calibrate::{CalibrateArgs, Param, describe, param_form};
+use crate::study::calibrate::{CalibrateArgs, Param, describe, param_form, params_text};
 use anyhow::Result;
 use std::io::Write;
 use tilth_tools::calibrate::{Linearised, Posterior};
@@ -129,11 +129,7 @@ fn markdown(args: &CalibrateArgs, params: &[Param], fitted: &Fitted) -> String {
         args.data.display(),
         params.len(),
         rows.len(),
-        params
-            .iter()
-            .map(|p| format!("{}.{} in [{}, {}]", p.pair, p.key, p.low, p.high))
-            .collect::<Vec<_>>()
-            .join(", "),
+        params_text(params),
         args.seeds,
         args.check_seeds.unwrap_or(args.seeds),
         args.tolerance,
