@@ -1,18 +1,64 @@
 //! `tilth bench settling-bed`: the kernel's speed benchmark
 //! (tools/bench/settling-bed/README.md); the scene is `lab::settling_bed`, the run and its
-//! report `sweep::bench`.
+//! report `sweep::bench`. `tilth bench lab`: the instruments' runs timed (`sweep::bench_lab`).
 
 use crate::lab::settling_bed::{self, SettlingBed};
 use crate::sweep::bench;
+use crate::sweep::bench_lab::{self, LabBench, Scale};
 use anyhow::Result;
 use clap::{Args, Subcommand, ValueEnum};
 use std::io::Write;
+use std::path::PathBuf;
 use tilth_kernel::sim::PairPath;
 
 #[derive(Debug, Subcommand)]
 pub enum Bench {
     /// Spheres falling into a box and settling into a bed (compare with LIGGGHTS and LAMMPS).
     SettlingBed(SettlingBedArgs),
+    /// Each instrument's run (funnel, direct shear, UCS) at the coarse preset and at the
+    /// study's scale, on 1 and 2 threads: wall time per run and runs per hour.
+    Lab(LabArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct LabArgs {
+    /// Experiment files to time (default: the study's three instruments).
+    #[arg(default_values_t = [
+        "sweeps/experiments/repose.toml".to_string(),
+        "sweeps/experiments/direct_shear.toml".to_string(),
+        "sweeps/experiments/ucs.toml".to_string(),
+    ])]
+    pub files: Vec<String>,
+    /// Sizes to run: the coarse preset, the file as written (the study's scale), or both.
+    #[arg(long, value_enum, default_value_t = ScaleArg::Coarse)]
+    pub scale: ScaleArg,
+    /// Worker threads per run, each measured in turn.
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 2],
+          value_parser = clap::value_parser!(u64).range(1..))]
+    pub threads: Vec<u64>,
+    /// Runs of each; the table shows the median.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub rounds: u64,
+    /// Cores a sweep fills with such runs (the runs-per-hour column).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..))]
+    pub cores: u64,
+    /// Scratch directory for the runs' files (each removed after its run).
+    #[arg(long, default_value = "runs/bench-lab")]
+    pub scratch: PathBuf,
+    /// No progress bars.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// `--scale`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ScaleArg {
+    /// The coarse preset (minutes in all).
+    Coarse,
+    /// The files as written: the study's scale (the funnel alone takes minutes a run).
+    Study,
+    /// Both.
+    Both,
 }
 
 #[derive(Debug, Args)]
@@ -105,6 +151,19 @@ pub fn bench(which: &Bench, out: &mut dyn Write) -> Result<()> {
             pair_path: args.pair_path.into(),
             show_progress: !args.quiet,
             pair_phase_reps: args.pair_phase_reps,
+        })?,
+        Bench::Lab(args) => bench_lab::lab(&LabBench {
+            files: args.files.iter().map(PathBuf::from).collect(),
+            scales: match args.scale {
+                ScaleArg::Coarse => vec![Scale::Coarse],
+                ScaleArg::Study => vec![Scale::Study],
+                ScaleArg::Both => vec![Scale::Coarse, Scale::Study],
+            },
+            threads: args.threads.clone(),
+            rounds: args.rounds as usize,
+            cores: args.cores,
+            scratch: args.scratch.clone(),
+            show_progress: !args.quiet,
         })?,
     };
     out.write_all(text.as_bytes())?;

@@ -5,6 +5,7 @@
 //! [`bench`] the speed benchmarks.
 
 pub mod bench;
+pub mod bench_lab;
 pub mod commands;
 pub mod design;
 pub mod execute;

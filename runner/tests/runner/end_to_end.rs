@@ -174,3 +174,60 @@ fn thread_count_does_not_change_results() {
     assert_eq!((&one.0, &one.1), (&two.0, &two.1));
     assert_eq!((one.2, two.2), (1.into(), 2.into()));
 }
+
+#[test]
+fn bench_lab_refuses_a_scene_file_before_any_run() {
+    let scratch = std::env::temp_dir().join("tilth-bench-lab-refuses");
+    let _ = std::fs::remove_dir_all(&scratch);
+    let out = crate::tilth_in_root(&[
+        "bench",
+        "lab",
+        "sweeps/experiments/repose.toml",
+        "sweeps/scenes/pile.toml",
+        "--scratch",
+        scratch.to_str().unwrap(),
+    ]);
+    let err = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("sweeps/scenes/pile.toml"), "{err}");
+    // Checked before the first run: the valid file was not run either.
+    assert!(!err.contains("run 1/"), "{err}");
+    assert!(!scratch.exists());
+}
+
+#[test]
+fn bench_lab_times_a_coarse_funnel_and_removes_its_files() {
+    let scratch = std::env::temp_dir().join("tilth-bench-lab-times");
+    let _ = std::fs::remove_dir_all(&scratch);
+    let out = crate::tilth_in_root(&[
+        "bench",
+        "lab",
+        "sweeps/experiments/repose.toml",
+        "--threads",
+        "1",
+        "--quiet",
+        "--scratch",
+        scratch.to_str().unwrap(),
+    ]);
+    let table = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let rows: Vec<&str> = table.lines().filter(|l| l.starts_with("sweeps/")).collect();
+    assert_eq!(rows.len(), 1, "{table}");
+    let cols: Vec<&str> = rows[0].split_whitespace().collect();
+    assert_eq!(
+        &cols[..3],
+        ["sweeps/experiments/repose.toml", "coarse", "1"]
+    );
+    let wall: f64 = cols[3].parse().unwrap();
+    let per_hour: f64 = cols[4].parse().unwrap();
+    // Two cores filled with one-thread runs: twice 3600 s over the wall time.
+    assert!(
+        (per_hour - 7200.0 / wall).abs() <= 0.05 * per_hour + 0.1,
+        "{table}"
+    );
+    let particles: u64 = cols[5].parse().unwrap();
+    assert!(particles > 0, "{table}");
+    // The runs' files are scratch: nothing is left in the directory.
+    let left = std::fs::read_dir(&scratch).map(|d| d.count()).unwrap_or(0);
+    assert_eq!(left, 0, "{}", scratch.display());
+}
