@@ -24,8 +24,15 @@ pub struct CellGrid {
 
 impl CellGrid {
     /// Bins `points` into cells no smaller than `min_cell` (m). The cell count is capped at
-    /// a few per point so a few stray particles cannot blow up memory.
+    /// four per point so a few stray particles cannot blow up memory.
     pub fn build(points: &[DVec3], min_cell: f64) -> CellGrid {
+        Self::build_capped(points, min_cell, 4)
+    }
+
+    /// [`CellGrid::build`] with at most `cells_per_point` cells a point (at least 64 in
+    /// all). Where the cap binds, cells grow past `min_cell` and a search through them
+    /// scans (cell / min_cell)^3 times the points it needs.
+    pub fn build_capped(points: &[DVec3], min_cell: f64, cells_per_point: usize) -> CellGrid {
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for p in points {
             lo = lo.min(*p);
@@ -43,7 +50,7 @@ impl CellGrid {
         };
         let extent = (hi - lo).max(DVec3::splat(min_cell));
         let mut cell = min_cell;
-        let max_cells = (4 * points.len()).max(64) as f64;
+        let max_cells = (cells_per_point * points.len()).max(64) as f64;
         loop {
             let d = (extent / cell).floor() + DVec3::ONE;
             if d.x * d.y * d.z <= max_cells || !cell.is_finite() {
@@ -196,6 +203,22 @@ mod tests {
             }
         }
         points
+    }
+
+    #[test]
+    fn cells_grow_past_the_minimum_only_where_the_cap_binds() {
+        // 1,000 points in a 10 x 10 x 10 lattice of spacing 1 and one far off: a box of
+        // 100 x 10 x 10 = 10,000 cells of 1. Four cells a point (4,004) cannot hold it,
+        // so the cells grow by 1.25 until they fit; 32 a point (32,032) can.
+        let mut points = lattice([10, 10, 10]);
+        points.push(DVec3::new(99.0, 0.0, 0.0));
+        let capped = CellGrid::build_capped(&points, 1.0, 4);
+        let dims = capped.dims.iter().product::<usize>();
+        assert!(dims <= 4 * points.len(), "{dims} cells");
+        assert!(1.0 / capped.inv_cell > 1.0);
+        let roomy = CellGrid::build_capped(&points, 1.0, 32);
+        assert_eq!(roomy.inv_cell, 1.0);
+        assert_eq!(roomy.dims, [100, 10, 10]);
     }
 
     #[test]
