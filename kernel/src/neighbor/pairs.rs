@@ -5,10 +5,12 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// Cells a particle at most in the search grid. A poured scene spans far more space than its
-/// grains fill (the funnel's 34,599 grains of 2 mm: a box of about 0.01 m^3, 300,000 cells of
-/// the cut): at four a particle its cells grew to 1.3-1.9 times the cut, and each search
-/// scanned 2-7 times the grains it needed. The grid costs 4 bytes a cell while it lives;
-/// which cells a pair is found through does not change the list (rows ascend).
+/// grains fill: the funnel's box (a 135 mm funnel above its tray, overflow on the floor) holds
+/// some 10^5 cells of the cut, more than four a grain while the pour is young. Where the cap
+/// binds, cells grow past the cut and each search scans (cell / cut)^3 times the grains it
+/// needs (the study-scale funnel's first 0.6 s: lists 1.8x faster at 32 than at 4,
+/// BENCHMARKS.md). The grid costs 4 bytes a cell while it lives; which cells a pair is found
+/// through does not change the list (rows ascend).
 const SEARCH_CELLS_PER_POINT: usize = 32;
 
 /// Decides, from a pair's history row, whether a pair that left the list's reach stays
