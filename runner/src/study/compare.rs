@@ -189,10 +189,21 @@ fn write_plots(dir: &Path, rows: &[compare_stats::Row]) -> Result<Vec<String>> {
         let svg = compare_plot::simulated_vs_measured_svg(&mine).map_err(|e| anyhow!(e))?;
         std::fs::write(dir.join(&name), svg)?;
         names.push(name);
-        for cond in super::measurements::conditions_of(test) {
+        let mut varied: Vec<String> = super::measurements::conditions_of(test)
+            .iter()
+            .map(|c| c.to_string())
+            .collect();
+        varied.extend(
+            mine.iter()
+                .flat_map(|r| r.conditions.keys())
+                .filter(|k| super::measurements::setting_of(k).is_some() && !varied.contains(k))
+                .cloned()
+                .collect::<std::collections::BTreeSet<_>>(),
+        );
+        for cond in &varied {
             let mut xs: Vec<f64> = mine
                 .iter()
-                .filter_map(|r| r.conditions.get(*cond).copied())
+                .filter_map(|r| r.conditions.get(cond.as_str()).copied())
                 .collect();
             xs.sort_by(f64::total_cmp);
             xs.dedup();
@@ -269,8 +280,11 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
     let mut md = String::from(
         "| test | moisture % | firmness MPa | observable | measured | simulated | scatter | error |\n|---|---|---|---|---|---|---|---|\n",
     );
-    let mut csv = String::from(
-        "row,test,moisture_pct,firmness_mpa,normal_pressure_pa,observable,measured,simulated_mean,simulated_scatter,relative_error,problems\n",
+    let measured_rows: Vec<Measurement> = rows.iter().map(|r| r.measurement.clone()).collect();
+    let settings = super::measurements::setting_columns(&measured_rows);
+    let mut csv = format!(
+        "row,test,moisture_pct,firmness_mpa,normal_pressure_pa,{}observable,measured,simulated_mean,simulated_scatter,relative_error,problems\n",
+        settings.iter().map(|k| format!("{k},")).collect::<String>()
     );
     for r in rows {
         let m = &r.measurement;
@@ -280,9 +294,17 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
                 .map(|v| format!("{v}"))
                 .unwrap_or_default()
         };
+        let test = std::iter::once(m.test.clone())
+            .chain(
+                settings
+                    .iter()
+                    .filter_map(|k| Some(format!("{k} = {}", m.conditions.get(k)?))),
+            )
+            .collect::<Vec<_>>()
+            .join(", ");
         md += &format!(
             "| {} | {} | {} | {} | {} {} | {} | {} | {} |\n",
-            m.test,
+            test,
             c("moisture_pct"),
             c("firmness_mpa"),
             m.observable,
@@ -295,12 +317,16 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
                 .unwrap_or_else(|| { r.problems.first().cloned().unwrap_or_else(|| "-".into()) })
         );
         csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{}{},{},{},{},{},{}\n",
             m.row,
             m.test,
             c("moisture_pct"),
             c("firmness_mpa"),
             c("normal_pressure_pa"),
+            settings
+                .iter()
+                .map(|k| format!("{},", c(k)))
+                .collect::<String>(),
             m.observable,
             m.value,
             fmt(r.simulated_mean, 4),

@@ -229,11 +229,11 @@ pub fn simulate(
     let (plans, group) = plan_tests(rows, how)?;
     // By position in `rows`: two rows may share a file row (every reading of a conditions row).
     let mut by_row: BTreeMap<usize, (Vec<f64>, Vec<String>)> = BTreeMap::new();
-    for (test, plan, dir) in &plans {
+    for (k, (_, plan, dir)) in plans.iter().enumerate() {
         run_generated(plan, dir, &how.lab.dispatch(), how.lab.quiet, stop)?;
-        for (i, m) in rows.iter().enumerate().filter(|(_, m)| &m.test == test) {
+        for (i, m) in rows.iter().enumerate().filter(|(i, _)| group[*i].0 == k) {
             let (sims, problems) = by_row.entry(i).or_default();
-            for run in plan.runs.iter().filter(|r| r.std == group[i]) {
+            for run in plan.runs.iter().filter(|r| r.std == group[i].1) {
                 let s = read_summary(&run_dir(dir, run.id));
                 let v = s.as_ref().and_then(|s| observed(s, &m.observable));
                 match (v, s) {
@@ -319,29 +319,37 @@ fn tests_of(rows: &[Measurement]) -> Vec<&str> {
 /// A test's runs for `rows`: the test, its generated plan and the directory it runs in.
 type TestPlan = (String, Plan, PathBuf);
 
-/// The runs `simulate` needs, one plan per test, and `group[i]`: row i's set of runs (its
-/// conditions' number within its test).
-fn plan_tests(rows: &[Measurement], how: &Simulate) -> Result<(Vec<TestPlan>, Vec<usize>)> {
+/// Row i's plan (its index) and its set of runs in that plan (its conditions' number).
+type RowRuns = (usize, usize);
+
+/// The runs `simulate` needs and `group[i]`: row i's plan and its set of runs in that plan
+/// (its conditions' number). One plan per test and set of setting columns the rows fill
+/// (`repose.drop_height`, ...): each setting is a factor of its plan.
+fn plan_tests(rows: &[Measurement], how: &Simulate) -> Result<(Vec<TestPlan>, Vec<RowRuns>)> {
     let model = match how.lab.cache.as_deref() {
         Some(cache) => cached_model(how.model, cache)?,
         None => how.model.to_path_buf(),
     };
-    let tests = tests_of(rows);
-    // Rows of one test at the same conditions (a repose run's angle, tray mass and flow
-    // rate) share their runs: `group[i]` is row i's set of runs, numbered per test.
-    let mut group = vec![0usize; rows.len()];
+    let mut group: Vec<RowRuns> = vec![(0, 0); rows.len()];
     let mut plans = vec![];
-    for test in &tests {
-        let factors = condition_factors(test);
+    for (test, settings) in tests_and_settings(rows) {
+        let mut factors = condition_factors(&test);
+        factors.extend(settings.iter().map(|k| factor(k, k)));
+        // Rows of one test at the same conditions (a repose run's angle, tray mass and flow
+        // rate) share their runs: numbered per plan.
         let mut conditions: Vec<BTreeMap<String, f64>> = vec![];
         let mut seen: Vec<&BTreeMap<String, f64>> = vec![];
-        for (i, m) in rows.iter().enumerate().filter(|(_, m)| m.test == *test) {
+        let mine = rows
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.test == test && setting_keys(m) == settings);
+        for (i, m) in mine {
             if let Some(g) = seen.iter().position(|c| **c == m.conditions) {
-                group[i] = g + 1;
+                group[i] = (plans.len(), g + 1);
                 continue;
             }
             seen.push(&m.conditions);
-            group[i] = seen.len();
+            group[i] = (plans.len(), seen.len());
             let mut values = BTreeMap::new();
             for f in &factors {
                 let v = m.conditions.get(&f.name).ok_or_else(|| {
@@ -356,42 +364,80 @@ fn plan_tests(rows: &[Measurement], how: &Simulate) -> Result<(Vec<TestPlan>, Ve
             }
             conditions.push(values);
         }
-        // Replicate-major: every condition's first seed, then every condition's second, ...
-        // so that asking for more replicates later appends runs and keeps the numbers (and
-        // the finished runs) of those already done.
-        let mut runs = vec![];
-        for r in 0..how.replicates {
-            for (k, values) in conditions.iter().enumerate() {
-                runs.push(PlannedRun {
-                    id: runs.len() + 1,
-                    std: k + 1,
-                    replicate: r + 1,
-                    coded: BTreeMap::new(),
-                    values: values.clone(),
-                    seed: condition_seed(how.first_seed + r as u64, values),
-                });
-            }
-        }
-        let text = experiment_text(test, &model, how.lab.coarse, how.set);
-        let mut plan = Plan::generated(test, text, Path::new("."), factors, runs)
-            .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
-        // The sweep's identity leaves out how many replicates it has (each run is still
-        // checked against its own seed and conditions when it is reused).
-        plan.fingerprint = fnv1a(&[
-            &plan.sweep_text,
-            &serde_json::to_string(&conditions)?,
-            &how.first_seed.to_string(),
-        ]);
-        let dir = match how.lab.cache.as_deref() {
-            Some(cache) => cache.join(format!(
-                "{test}-{}",
-                fnv1a(&[&plan.fingerprint, build_id()?])
-            )),
-            None => how.out.join(test),
-        };
-        plans.push((test.to_string(), plan, dir));
+        let name = std::iter::once(test.clone())
+            .chain(settings.iter().map(|k| k.replace('.', "_")))
+            .collect::<Vec<_>>()
+            .join("+");
+        plans.push(plan_one(&test, &name, factors, &conditions, &model, how)?);
     }
     Ok((plans, group))
+}
+
+/// The tests of `rows` with the setting columns each row fills, in first-row order.
+fn tests_and_settings(rows: &[Measurement]) -> Vec<(String, Vec<String>)> {
+    let mut out: Vec<(String, Vec<String>)> = vec![];
+    for m in rows {
+        let key = (m.test.clone(), setting_keys(m));
+        if !out.contains(&key) {
+            out.push(key);
+        }
+    }
+    out
+}
+
+/// The setting columns (`TEST.KEY`) among a row's conditions.
+fn setting_keys(m: &Measurement) -> Vec<String> {
+    m.conditions
+        .keys()
+        .filter(|k| super::measurements::setting_of(k).is_some())
+        .cloned()
+        .collect()
+}
+
+/// The plan of one test's `conditions` (each a factor setting), with `how.replicates` seeds
+/// each, and its directory: `out/NAME/`, or in the cache by its fingerprint.
+fn plan_one(
+    test: &str,
+    name: &str,
+    factors: Vec<Factor>,
+    conditions: &[BTreeMap<String, f64>],
+    model: &Path,
+    how: &Simulate,
+) -> Result<TestPlan> {
+    // Replicate-major: every condition's first seed, then every condition's second, ...
+    // so that asking for more replicates later appends runs and keeps the numbers (and
+    // the finished runs) of those already done.
+    let mut runs = vec![];
+    for r in 0..how.replicates {
+        for (k, values) in conditions.iter().enumerate() {
+            runs.push(PlannedRun {
+                id: runs.len() + 1,
+                std: k + 1,
+                replicate: r + 1,
+                coded: BTreeMap::new(),
+                values: values.clone(),
+                seed: condition_seed(how.first_seed + r as u64, values),
+            });
+        }
+    }
+    let text = experiment_text(test, model, how.lab.coarse, how.set);
+    let mut plan = Plan::generated(test, text, Path::new("."), factors, runs)
+        .with_context(|| format!("{}: rows of test {test}", how.data.display()))?;
+    // The sweep's identity leaves out how many replicates it has (each run is still
+    // checked against its own seed and conditions when it is reused).
+    plan.fingerprint = fnv1a(&[
+        &plan.sweep_text,
+        &serde_json::to_string(&conditions)?,
+        &how.first_seed.to_string(),
+    ]);
+    let dir = match how.lab.cache.as_deref() {
+        Some(cache) => cache.join(format!(
+            "{test}-{}",
+            fnv1a(&[&plan.fingerprint, build_id()?])
+        )),
+        None => how.out.join(name),
+    };
+    Ok((test.to_string(), plan, dir))
 }
 
 /// Makes the runs of several settings of the model (`hows`) at once where that saves time:

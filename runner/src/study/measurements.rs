@@ -5,6 +5,12 @@
 //! repose,6,,,repose_angle_deg,35.53,deg,0.8,10,table 1
 //! ```
 //!
+//! A file may add setting columns, `TEST.KEY`: a number key of a test's own table (the keys of
+//! `sweeps/experiments/*.toml`, as `--set` takes them), which a row of that test sets for its
+//! own runs over the preset and any `--set`: the funnel at another drop height
+//! (`repose.drop_height`) or on another tray (`repose.tray_diameter`). An empty cell keeps the
+//! preset's value. A setting is a condition of its row: it keys the row's runs and seeds.
+//!
 //! Everything is checked before any simulation starts, and every error names the file, the
 //! row (1-based, the header is row 1) and the column, with what is allowed: a missing
 //! column, an unknown test or observable, a condition the test needs left empty, a number
@@ -56,8 +62,62 @@ pub fn observable_of(test: &str) -> Option<(&'static str, &'static str)> {
 /// Condition columns, in file order.
 pub const CONDITIONS: [&str; 3] = ["moisture_pct", "firmness_mpa", "normal_pressure_pa"];
 
+/// A setting column's test and key (`repose.drop_height` -> `("repose", "drop_height")`), or
+/// None for a column that is not one.
+pub fn setting_of(column: &str) -> Option<(&str, &str)> {
+    let (test, key) = column.split_once('.')?;
+    TESTS.contains(&test).then_some((test, key))
+}
+
+/// Checks a header's setting columns: each a number key of its test's table. Returns the
+/// columns that are neither settings nor in `allowed`.
+fn check_setting_columns<'h>(
+    file: &str,
+    head: &'h [String],
+    allowed: &[&str],
+) -> Result<Vec<&'h str>> {
+    let mut unknown = vec![];
+    for h in head {
+        if allowed.contains(&h.as_str()) {
+            continue;
+        }
+        let Some((test, key)) = setting_of(h) else {
+            unknown.push(h.as_str());
+            continue;
+        };
+        crate::lab::experiment::check_test_key(test, key, &toml::Value::Float(1.0)).map_err(
+            |e| {
+                anyhow!(
+                    "{file}: column `{h}`: {e}; a setting column is TEST.KEY with a number key of the test's table (see sweeps/experiments/{test}.toml)"
+                )
+            },
+        )?;
+    }
+    Ok(unknown)
+}
+
+/// The columns a conditions file may have: a measurement file's, and settings.
+pub fn check_conditions_columns(file: &str, head: &[String]) -> Result<()> {
+    let allowed: Vec<&str> = REQUIRED
+        .iter()
+        .chain(CONDITIONS.iter())
+        .chain(OPTIONAL.iter())
+        .copied()
+        .collect();
+    if let Some(h) = check_setting_columns(file, head, &allowed)?.first() {
+        bail!(
+            "{file}: unknown column `{h}`; allowed: {}, and settings TEST.KEY (e.g. repose.drop_height)",
+            allowed.join(", ")
+        );
+    }
+    Ok(())
+}
+
 /// Columns every file must have.
 const REQUIRED: [&str; 4] = ["test", "observable", "value", "unit"];
+
+/// Columns a file may have besides the required ones, conditions and settings.
+const OPTIONAL: [&str; 3] = ["uncertainty", "replicates", "source"];
 
 /// One measurement row.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -210,6 +270,19 @@ impl Cells<'_> {
                 .ok_or_else(|| anyhow!("{}: empty, but a {test} test needs it", self.at(name)))?;
             conditions.insert(name.to_string(), v);
         }
+        for column in self.head.iter().filter(|h| setting_of(h).is_some()) {
+            let Some(v) = self.number(column)? else {
+                continue;
+            };
+            let (owner, _) = setting_of(column).expect("a setting");
+            if owner != test {
+                bail!(
+                    "{}: a {test} row cannot set a {owner} test's key; leave it empty",
+                    self.at(column)
+                );
+            }
+            conditions.insert(column.to_string(), v);
+        }
         Ok(conditions)
     }
 }
@@ -225,25 +298,15 @@ pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
         .collect();
     if !missing.is_empty() {
         bail!(
-            "{file}: missing column{} {}; a measurement file needs {} (conditions: {}; optional: uncertainty, replicates, source)",
+            "{file}: missing column{} {}; a measurement file needs {} (conditions: {}; optional: {}, and settings TEST.KEY)",
             if missing.len() > 1 { "s" } else { "" },
             missing.join(", "),
             REQUIRED.join(", "),
-            CONDITIONS.join(", ")
+            CONDITIONS.join(", "),
+            OPTIONAL.join(", ")
         );
     }
-    let allowed: Vec<&str> = REQUIRED
-        .iter()
-        .chain(CONDITIONS.iter())
-        .chain(["uncertainty", "replicates", "source"].iter())
-        .copied()
-        .collect();
-    if let Some(h) = head.iter().find(|h| !allowed.contains(&h.as_str())) {
-        bail!(
-            "{file}: unknown column `{h}`; allowed: {}",
-            allowed.join(", ")
-        );
-    }
+    check_conditions_columns(&file, &head)?;
     let mut out = vec![];
     for cells in rows_of(&mut reader, &head, &file) {
         let c = cells?;
@@ -321,8 +384,10 @@ pub fn check_against_model(rows: &[Measurement], model: &Model, path: &Path) -> 
 pub fn write_measurements(path: &Path, rows: &[Measurement]) -> Result<()> {
     let mut w = csv::Writer::from_path(path)
         .with_context(|| format!("{}: cannot write", path.display()))?;
+    let settings = setting_columns(rows);
     let mut head: Vec<&str> = vec!["test"];
     head.extend(CONDITIONS);
+    head.extend(settings.iter().map(String::as_str));
     head.extend([
         "observable",
         "value",
@@ -334,7 +399,11 @@ pub fn write_measurements(path: &Path, rows: &[Measurement]) -> Result<()> {
     w.write_record(&head)?;
     for m in rows {
         let mut rec = vec![m.test.clone()];
-        for c in CONDITIONS {
+        for c in CONDITIONS
+            .iter()
+            .copied()
+            .chain(settings.iter().map(String::as_str))
+        {
             rec.push(
                 m.conditions
                     .get(c)
@@ -352,4 +421,14 @@ pub fn write_measurements(path: &Path, rows: &[Measurement]) -> Result<()> {
     }
     w.flush()?;
     Ok(())
+}
+
+/// The setting columns the rows use, in name order.
+pub fn setting_columns(rows: &[Measurement]) -> Vec<String> {
+    let set: std::collections::BTreeSet<&String> = rows
+        .iter()
+        .flat_map(|m| m.conditions.keys())
+        .filter(|k| setting_of(k).is_some())
+        .collect();
+    set.into_iter().cloned().collect()
 }

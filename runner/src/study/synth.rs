@@ -18,7 +18,8 @@
 //! (`D.runs/<test>/`, resumable) unless `--work` says where.
 
 use super::measurements::{
-    CONDITIONS, Measurement, check_against_model, open_csv, rows_of, write_measurements,
+    CONDITIONS, Measurement, check_against_model, check_conditions_columns, open_csv, rows_of,
+    write_measurements,
 };
 use crate::lab::model::Model;
 use crate::study::lab_runs::{LabRunArgs, Simulate, simulate};
@@ -188,7 +189,7 @@ fn name_and_number<'a>(option: &str, w: &'a str, form: &str) -> Result<(&'a str,
     Ok((name.trim(), x))
 }
 
-/// Reads the conditions file: rows of `test` and its conditions.
+/// Reads the conditions file: rows of `test` and its conditions (and settings, `TEST.KEY`).
 pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
     let (mut reader, head) = open_csv(path)?;
     let file = path.display().to_string();
@@ -198,6 +199,7 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
             CONDITIONS.join(", ")
         );
     }
+    check_conditions_columns(&file, &head)?;
     let mut rows = vec![];
     for cells in rows_of(&mut reader, &head, &file) {
         let c = cells?;

@@ -101,6 +101,20 @@ pub fn select_rows(
         .into_iter()
         .filter(|m| tests.contains(&m.test.as_str()))
         .collect();
+    // The surface's runs take only the tests' conditions as factors; a row's setting would
+    // be dropped unseen.
+    if let Some((m, k)) = rows.iter().find_map(|m| {
+        m.conditions
+            .keys()
+            .find(|k| crate::study::measurements::setting_of(k).is_some())
+            .map(|k| (m, k))
+    }) {
+        bail!(
+            "{}: row {}, column {k}: calibrate takes no per-row settings; give one setting to every run with --set {k}=VALUE",
+            args.data.display(),
+            m.row
+        );
+    }
     for f in &args.filters {
         let (k, v) = f
             .split_once('=')
