@@ -43,7 +43,8 @@ pub struct NullIn {
 #[derive(Deserialize)]
 pub struct ContenderIn {
     pub name: String,
-    pub strength: f64,
+    /// None when its fit failed.
+    pub strength: Option<f64>,
     pub dir: PathBuf,
 }
 

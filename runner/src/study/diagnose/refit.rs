@@ -62,6 +62,9 @@ pub struct Contender {
     /// Each row's standardised residual at the fit.
     pub z: Vec<f64>,
     pub dir: String,
+    /// Why its fit could not be made (its runs failed: a funnel that jams at a step of the
+    /// fit); such a contender is neither needed nor excluded, and is never ruled out.
+    pub failed: Option<String>,
 }
 
 /// The free parameters' own fit, the null model of the contenders.
@@ -82,6 +85,30 @@ pub(super) type StepOf<'a> = dyn Fn(&Diagnosed) -> Result<(f64, Vec<f64>)> + 'a;
 pub struct Refits {
     pub free: NullFit,
     pub contenders: Vec<Contender>,
+}
+
+impl Contender {
+    /// A contender whose fit failed with `why`.
+    fn failed(name: &str, param: String, dir: &Path, why: String) -> Contender {
+        Contender {
+            name: name.to_string(),
+            param,
+            strength: f64::NAN,
+            standard_error: None,
+            chi2: f64::NAN,
+            dof: f64::NAN,
+            p_value: f64::NAN,
+            chi2_drop: f64::NAN,
+            p_needed: f64::NAN,
+            needed: false,
+            within_noise: false,
+            p_worse: None,
+            excluded: false,
+            z: vec![],
+            dir: dir.display().to_string(),
+            failed: Some(why),
+        }
+    }
 }
 
 /// The contenders of a linear diagnosis, best first.
@@ -238,7 +265,7 @@ fn refitted_verdict(
         dof: misfit.1.max(0.0) as usize,
         p_value: misfit.2,
     };
-    let (verdict, effects, ambiguous) = match ok.as_slice() {
+    let (verdict, effects, mut ambiguous) = match ok.as_slice() {
         [] if !any_needed && refits.free.within_noise => (Kind::NoEffect, vec![], vec![]),
         [] => (Kind::NoneOfTheCandidates, vec![], vec![]),
         [one] => {
@@ -257,6 +284,20 @@ fn refitted_verdict(
             vec![],
             several.iter().map(|c| c.name.clone()).collect(),
         ),
+    };
+    // A contender whose fit failed is not ruled out: beside any effect named, it is a rival.
+    let unjudged: Vec<String> = fits
+        .iter()
+        .filter(|c| c.failed.is_some())
+        .map(|c| c.name.clone())
+        .collect();
+    let (verdict, effects) = match verdict {
+        Kind::Effect | Kind::Ambiguous if !unjudged.is_empty() => {
+            ambiguous.extend(effects.iter().map(|e| e.name.clone()));
+            ambiguous.extend(unjudged);
+            (Kind::Ambiguous, vec![])
+        }
+        _ => (verdict, effects),
     };
     Verdict {
         verdict,
@@ -314,8 +355,15 @@ pub(super) fn refit(
         let (step, held_values) = step_of(d)?;
         let param = contender_param(d, step, &held_values);
         let dir = root.join(d.score.name.replace(':', "-"));
-        let f = fit_into(args, (&free_model, &data), &dir, Some(&param))
-            .with_context(|| format!("refitting {}", d.score.name))?;
+        let f = match fit_into(args, (&free_model, &data), &dir, Some(&param)) {
+            Ok(f) => f,
+            Err(e) => {
+                let why = format!("{e:#}");
+                eprintln!("refitting {}: {why}; it stays a rival", d.score.name);
+                fits.push(Contender::failed(&d.score.name, param, &dir, why));
+                continue;
+            }
+        };
         let p_value = chi2_sf(f.chi2, f.dof);
         fits.push(Contender {
             name: d.score.name.clone(),
@@ -333,14 +381,18 @@ pub(super) fn refit(
             excluded: false,
             z: f.z,
             dir: dir.display().to_string(),
+            failed: None,
         });
     }
+    // The Holm family is the contenders whose fits were made.
     let raw: Vec<f64> = fits
         .iter()
+        .filter(|c| c.failed.is_none())
         .map(|c| chi2_sf(c.chi2_drop.max(0.0), 1.0))
         .collect();
     for (c, p) in fits
         .iter_mut()
+        .filter(|c| c.failed.is_none())
         .zip(tilth_tools::diagnose::holm_adjust(&raw))
     {
         c.p_needed = p;
@@ -391,6 +443,7 @@ mod tests {
             excluded,
             z: vec![],
             dir: String::new(),
+            failed: None,
         }
     }
 
@@ -465,6 +518,33 @@ mod tests {
         assert_eq!(null.misfit.chi2, 18.0, "the free parameters' fit");
         let unexplained = v(refits(45.0, vec![fit("a", 44.0, false, false)]));
         assert_eq!(unexplained.verdict, Kind::NoneOfTheCandidates);
+    }
+
+    #[test]
+    fn a_contender_whose_fit_failed_is_never_ruled_out() {
+        let score = |_: &str| (12.0, 0.001);
+        let v = |r: Refits| refitted_verdict(&linear(), &r, &score);
+        let jammed = || Contender::failed("twisting", String::new(), Path::new("."), "jam".into());
+        // The fits alone would name fines; the contender that could not be fitted stays.
+        let named = v(refits(
+            50.0,
+            vec![fit("fines", 20.0, true, false), jammed()],
+        ));
+        assert_eq!(named.verdict, Kind::Ambiguous);
+        assert_eq!(named.ambiguous, ["fines", "twisting"]);
+        assert!(named.effects.is_empty());
+        let several = v(refits(
+            50.0,
+            vec![
+                fit("a", 35.0, true, false),
+                fit("b", 18.0, true, false),
+                jammed(),
+            ],
+        ));
+        assert_eq!(several.ambiguous, ["b", "a", "twisting"]);
+        // Nothing named: the verdict stands, and no failed fit is called an effect.
+        let none = v(refits(70.0, vec![fit("a", 60.0, true, false), jammed()]));
+        assert_eq!(none.verdict, Kind::NoneOfTheCandidates);
     }
 
     #[test]

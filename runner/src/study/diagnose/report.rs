@@ -250,6 +250,14 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
         p(r.free.p_value)
     );
     for c in &r.contenders {
+        if let Some(why) = &c.failed {
+            md += &format!(
+                "| {} | its fit failed, so it is not ruled out: {} |||||||||||\n",
+                c.name,
+                why.replace('|', "/").replace('\n', " ")
+            );
+            continue;
+        }
         md += &format!(
             "| {} | {:.4} | {} | {:.1} | {} | {} | {:.1} | {} | {} | {} | {} | {} |\n",
             c.name,

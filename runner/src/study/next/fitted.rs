@@ -4,7 +4,7 @@
 //! ([`tilth_tools::diagnose::discriminate::fitted_separations`]). Nothing is linearised: a
 //! rival several steps strong predicts what it predicts.
 
-use super::{NextArgs, Suggestion, group};
+use super::{NextArgs, Scored, Suggestion, Unscored, group};
 use crate::study::diagnose::file::DiagnosisFile;
 use crate::study::lab_runs::{Simulate, prefetch, simulate};
 use crate::study::measurements::Measurement;
@@ -30,7 +30,7 @@ pub(super) fn fitted_rivals(d: &DiagnosisFile, rivals: &[String]) -> Option<Vec<
                 FREE => (&refit.free.dir, 0.0),
                 _ => {
                     let c = refit.contenders.iter().find(|c| &c.name == n)?;
-                    (&c.dir, c.strength)
+                    (&c.dir, c.strength?)
                 }
             };
             let model = dir.join("model.toml");
@@ -47,7 +47,7 @@ pub(super) fn fitted_options(
     models: &[(PathBuf, f64)],
     menu: &[Measurement],
     noise: &BTreeMap<String, Noise>,
-) -> Result<Vec<Suggestion>> {
+) -> Result<Scored> {
     let set = args.lab.set.parse()?;
     let r = d.replicates;
     let stop = execute::stop_on_signals()?;
@@ -74,6 +74,7 @@ pub(super) fn fitted_options(
         .collect();
     prefetch(menu, &hows)?;
     let mut values: Vec<Vec<Vec<f64>>> = vec![];
+    let mut problems: Vec<Vec<Vec<String>>> = vec![];
     for (k, how) in hows.iter().enumerate() {
         if !args.lab.quiet {
             eprintln!(
@@ -83,16 +84,16 @@ pub(super) fn fitted_options(
                 rivals[k]
             );
         }
-        values.push(
-            simulate(menu, how, &stop)?
-                .into_iter()
-                .map(|s| s.0)
-                .collect(),
-        );
+        let (v, p): (Vec<Vec<f64>>, Vec<Vec<String>>) =
+            simulate(menu, how, &stop)?.into_iter().unzip();
+        values.push(v);
+        problems.push(p);
     }
     let runs = (2 + d.free_parameters.len() + d.candidates.len()) * r;
     let mut options = vec![];
+    let mut unscored = vec![];
     for (test, conditions, members) in group(menu) {
+        let why = failures(rivals, &problems, &members, r);
         // Readings every rival ran completely, with the lab's variance of one measurement:
         // --noise, else the runs' own scatter (their mean over the rivals).
         let kept: Vec<usize> = members
@@ -115,6 +116,11 @@ pub(super) fn fitted_options(
             })
             .collect();
         if kept.is_empty() {
+            unscored.push(Unscored {
+                test,
+                conditions,
+                why,
+            });
             continue;
         }
         let per_rival: Vec<Vec<Vec<f64>>> = values
@@ -136,5 +142,60 @@ pub(super) fn fitted_options(
             runs,
         ));
     }
-    Ok(options)
+    Ok((options, unscored))
+}
+
+/// Per rival whose runs of a measurement (`members`, its readings) failed: how many of the
+/// `r`, and the first one's problem up to its first sentence's end.
+fn failures(
+    rivals: &[String],
+    problems: &[Vec<Vec<String>>],
+    members: &[usize],
+    r: usize,
+) -> Vec<String> {
+    let mut why = vec![];
+    for (name, p) in rivals.iter().zip(problems) {
+        let Some(worst) = members.iter().map(|&i| &p[i]).max_by_key(|p| p.len()) else {
+            continue;
+        };
+        if let Some(first) = worst.first() {
+            let short = first.split(". ").next().unwrap_or(first);
+            why.push(format!(
+                "{name}: {} of {r} runs failed ({short})",
+                worst.len()
+            ));
+        }
+    }
+    if why.is_empty() {
+        why.push("no reading scatters and --noise gives none".to_string());
+    }
+    why
+}
+
+#[cfg(test)]
+mod tests {
+    use super::failures;
+
+    #[test]
+    fn failures_name_each_rival_whose_runs_failed_with_the_first_problem() {
+        let rivals = ["twisting".to_string(), "capillary".to_string()];
+        let jam = "run 1: the funnel jammed at t = 0.58 s. The outlet is 10 diameters wide";
+        // [rival][menu row] -> problems; the measurement's readings are rows 0 and 1.
+        let problems = vec![
+            vec![
+                vec![],
+                vec![jam.to_string(), "run 3: x".into(), "run 4: y".into()],
+            ],
+            vec![vec![], vec![]],
+        ];
+        assert_eq!(
+            failures(&rivals, &problems, &[0, 1], 4),
+            ["twisting: 3 of 4 runs failed (run 1: the funnel jammed at t = 0.58 s)"]
+        );
+        // No run failed: the readings were left out for want of scatter.
+        assert_eq!(
+            failures(&rivals, &problems, &[0], 4),
+            ["no reading scatters and --noise gives none"]
+        );
+    }
 }

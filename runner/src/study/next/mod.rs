@@ -101,7 +101,9 @@ fn next_into(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
     let menu = read_menu(&args.menu)?;
     check_against_model(&menu, &model, &args.menu)?;
     let noise = parse_noise(&args.noise)?;
-    let (strengths, baseline, mut options, mode) = match fitted::fitted_rivals(&d, &rivals) {
+    let (strengths, baseline, (mut options, unscored), mode) = match fitted::fitted_rivals(
+        &d, &rivals,
+    ) {
         Some(models) => {
             let options = fitted::fitted_options(args, &d, &rivals, &models, &menu, &noise)?;
             let strengths = models.iter().map(|m| m.1).collect();
@@ -119,8 +121,13 @@ fn next_into(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
     };
     if options.is_empty() {
         bail!(
-            "{}: no measurement of the menu could be scored",
-            args.menu.display()
+            "{}: no measurement of the menu could be scored: {}",
+            args.menu.display(),
+            unscored
+                .iter()
+                .map(Unscored::describe)
+                .collect::<Vec<_>>()
+                .join("; ")
         );
     }
     options.sort_by(|a, b| b.separation.total_cmp(&a.separation));
@@ -141,12 +148,18 @@ fn next_into(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
         "noise": args.noise,
         "now": baseline,
         "options": options,
+        "unscored": unscored,
     });
     std::fs::write(
         args.out.join("next.json"),
         serde_json::to_vec_pretty(&json)?,
     )?;
-    let md = report(args, (&rivals, &strengths, mode), now.as_ref(), &options);
+    let md = report(
+        args,
+        (&rivals, &strengths, mode),
+        now.as_ref(),
+        (&options, &unscored),
+    );
     std::fs::write(args.out.join("next.md"), &md)?;
     out.write_all(md.as_bytes())?;
     writeln!(
@@ -166,7 +179,7 @@ fn linear_options(
     model: &Model,
     rivals: &[String],
     (menu, noise): (&[Measurement], &BTreeMap<String, Noise>),
-) -> Result<(Vec<f64>, Vec<Separation>, Vec<Suggestion>)> {
+) -> Result<(Vec<f64>, Vec<Separation>, Scored)> {
     let set = args.lab.set.parse()?;
     let variants = variants_of(d, model, &args.diagnosis, rivals)?;
     // Simulate every menu row with every variant, seeds R+1..2R as the diagnosis's
@@ -282,14 +295,19 @@ fn score(
     old: &Rows,
     rivals: &Rivals,
     runs: usize,
-) -> Vec<Suggestion> {
+) -> Scored {
     let mut options = vec![];
+    let mut unscored = vec![];
     for (test, conditions, members) in group(menu) {
         let (rows, kept) = measured.rows(menu, &members, rivals.names.len());
         if kept.is_empty() {
-            eprintln!(
-                "{test} at {conditions:?}: no reading could be scored (a run failed, or no reading scatters and --noise gives none); left out"
-            );
+            unscored.push(Unscored {
+                test,
+                conditions,
+                why: vec![
+                    "a run failed, or no reading scatters and --noise gives none".to_string(),
+                ],
+            });
             continue;
         }
         let pairs = separations(
@@ -305,8 +323,37 @@ fn score(
             runs,
         ));
     }
-    options
+    (options, unscored)
 }
+
+/// A measurement of the menu that could not be ranked, and why (per rival, its runs'
+/// first problem): a funnel that jams for one rival and not for another is a difference
+/// the ranking cannot weigh, since the reading is missing.
+#[derive(Debug, Serialize)]
+pub struct Unscored {
+    pub test: String,
+    pub conditions: BTreeMap<String, f64>,
+    pub why: Vec<String>,
+}
+
+impl Unscored {
+    /// "TEST at C V, ...: WHY; WHY".
+    pub fn describe(&self) -> String {
+        format!(
+            "{} at {}: {}",
+            self.test,
+            self.conditions
+                .iter()
+                .map(|(c, v)| format!("{c} {v}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            self.why.join("; ")
+        )
+    }
+}
+
+/// The ranked measurements and those that could not be scored.
+type Scored = (Vec<Suggestion>, Vec<Unscored>);
 
 impl Suggestion {
     /// A measurement scored by its hardest pair.

@@ -1,6 +1,6 @@
 //! `next.md` and `conditions.csv`: the ranking in words and the best as a conditions file.
 
-use super::{NextArgs, Suggestion};
+use super::{NextArgs, Suggestion, Unscored};
 use anyhow::Result;
 use std::path::Path;
 use tilth_tools::diagnose::discriminate::{Separation, worst};
@@ -51,7 +51,7 @@ pub(super) fn report(
     args: &NextArgs,
     (rivals, strengths, mode): (&[String], &[f64], &str),
     now: Option<&Separation>,
-    options: &[Suggestion],
+    (options, unscored): (&[Suggestion], &[Unscored]),
 ) -> String {
     let mut md = format!(
         "# The next measurement: telling {} apart\n\n{} The power is that test's at the diagnosis's alpha. {} specimen{} per measurement; the lab's noise {}.\n\n",
@@ -118,5 +118,11 @@ pub(super) fn report(
         md += " Even this one is more likely than not to leave them ambiguous: measure it with more specimens, or several of the list.";
     }
     md += "\n";
+    if !unscored.is_empty() {
+        md += "\nNot ranked, as their readings are missing (a measurement on which one rival's runs fail and another's do not may still tell them apart, but not by this score):\n\n";
+        for u in unscored {
+            md += &format!("- {}\n", u.describe());
+        }
+    }
     md
 }
