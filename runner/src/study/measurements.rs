@@ -85,6 +85,11 @@ fn check_setting_columns<'h>(
             unknown.push(h.as_str());
             continue;
         };
+        if let Some((_, condition)) = KEYS_OF_CONDITIONS.iter().find(|(k, _)| k == h) {
+            bail!(
+                "{file}: column `{h}`: the test's key of the condition `{condition}`; give it there"
+            );
+        }
         crate::lab::experiment::check_test_key(test, key, &toml::Value::Float(1.0)).map_err(
             |e| {
                 anyhow!(
@@ -112,6 +117,10 @@ pub fn check_conditions_columns(file: &str, head: &[String]) -> Result<()> {
     }
     Ok(())
 }
+
+/// Test keys a condition column sets (`lab_runs::condition_factors`), not to be set twice.
+const KEYS_OF_CONDITIONS: [(&str, &str); 1] =
+    [("direct_shear.normal_pressure", "normal_pressure_pa")];
 
 /// Columns every file must have.
 const REQUIRED: [&str; 4] = ["test", "observable", "value", "unit"];

@@ -176,7 +176,15 @@ fn a_setting_column_sets_its_rows_runs_over_set() {
 fn a_bad_setting_column_is_refused_before_any_run() {
     let (dir, data) = setup("setting-refused");
     let tail = "observable,value,unit\n";
-    let cases: [(&str, &str, &[&str]); 5] = [
+    let cases: [(&str, &str, &[&str]); 6] = [
+        (
+            "test,moisture_pct,firmness_mpa,normal_pressure_pa,direct_shear.normal_pressure,",
+            "direct_shear,6,1.55,100000,50000,peak_shear_force_n,200,N",
+            &[
+                "column `direct_shear.normal_pressure`",
+                "`normal_pressure_pa`",
+            ],
+        ),
         (
             "test,moisture_pct,repose.tray_diamter,",
             "repose,6,0.1,tray_mass_g,9,g",
