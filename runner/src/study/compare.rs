@@ -280,8 +280,7 @@ fn write_outputs(args: &CompareArgs, rows: &[Compared], out: &mut dyn Write) -> 
     let mut md = String::from(
         "| test | moisture % | firmness MPa | observable | measured | simulated | scatter | error |\n|---|---|---|---|---|---|---|---|\n",
     );
-    let measured_rows: Vec<Measurement> = rows.iter().map(|r| r.measurement.clone()).collect();
-    let settings = super::measurements::setting_columns(&measured_rows);
+    let settings = super::measurements::setting_columns(&measured);
     let mut csv = format!(
         "row,test,moisture_pct,firmness_mpa,normal_pressure_pa,{}observable,measured,simulated_mean,simulated_scatter,relative_error,problems\n",
         settings.iter().map(|k| format!("{k},")).collect::<String>()

@@ -7,7 +7,7 @@
 //! go through the sweep runner (pinned cores, resumable) locally or as a Slurm job array, and
 //! are reused from a cache keyed by the build and the model's text.
 
-use super::measurements::{Measurement, TESTS};
+use super::measurements::{Measurement, TESTS, setting_columns};
 use crate::sweep::execute::{self, Options};
 use crate::sweep::job::{RunSummary, Status, read_summary, run_dir, write_atomic};
 use crate::sweep::plan::{Factor, Plan, PlannedRun, fnv1a};
@@ -332,7 +332,11 @@ fn plan_tests(rows: &[Measurement], how: &Simulate) -> Result<(Vec<TestPlan>, Ve
     };
     let mut group: Vec<RowRuns> = vec![(0, 0); rows.len()];
     let mut plans = vec![];
-    for (test, settings) in tests_and_settings(rows) {
+    let settings_of: Vec<Vec<String>> = rows
+        .iter()
+        .map(|m| setting_columns(std::slice::from_ref(m)))
+        .collect();
+    for (test, settings) in tests_and_settings(rows, &settings_of) {
         let mut factors = condition_factors(&test);
         factors.extend(settings.iter().map(|k| factor(k, k)));
         // Rows of one test at the same conditions (a repose run's angle, tray mass and flow
@@ -342,7 +346,7 @@ fn plan_tests(rows: &[Measurement], how: &Simulate) -> Result<(Vec<TestPlan>, Ve
         let mine = rows
             .iter()
             .enumerate()
-            .filter(|(_, m)| m.test == test && setting_keys(m) == settings);
+            .filter(|(i, m)| m.test == test && settings_of[*i] == settings);
         for (i, m) in mine {
             if let Some(g) = seen.iter().position(|c| **c == m.conditions) {
                 group[i] = (plans.len(), g + 1);
@@ -373,25 +377,20 @@ fn plan_tests(rows: &[Measurement], how: &Simulate) -> Result<(Vec<TestPlan>, Ve
     Ok((plans, group))
 }
 
-/// The tests of `rows` with the setting columns each row fills, in first-row order.
-fn tests_and_settings(rows: &[Measurement]) -> Vec<(String, Vec<String>)> {
+/// The tests of `rows` with the setting columns each row fills (`settings_of`), in
+/// first-row order.
+fn tests_and_settings(
+    rows: &[Measurement],
+    settings_of: &[Vec<String>],
+) -> Vec<(String, Vec<String>)> {
     let mut out: Vec<(String, Vec<String>)> = vec![];
-    for m in rows {
-        let key = (m.test.clone(), setting_keys(m));
+    for (m, settings) in rows.iter().zip(settings_of) {
+        let key = (m.test.clone(), settings.clone());
         if !out.contains(&key) {
             out.push(key);
         }
     }
     out
-}
-
-/// The setting columns (`TEST.KEY`) among a row's conditions.
-fn setting_keys(m: &Measurement) -> Vec<String> {
-    m.conditions
-        .keys()
-        .filter(|k| super::measurements::setting_of(k).is_some())
-        .cloned()
-        .collect()
 }
 
 /// The plan of one test's `conditions` (each a factor setting), with `how.replicates` seeds

@@ -69,21 +69,21 @@ pub fn setting_of(column: &str) -> Option<(&str, &str)> {
     TESTS.contains(&test).then_some((test, key))
 }
 
-/// Checks a header's setting columns: each a number key of its test's table. Returns the
-/// columns that are neither settings nor in `allowed`.
-fn check_setting_columns<'h>(
-    file: &str,
-    head: &'h [String],
-    allowed: &[&str],
-) -> Result<Vec<&'h str>> {
-    let mut unknown = vec![];
-    for h in head {
-        if allowed.contains(&h.as_str()) {
-            continue;
-        }
+/// The columns a conditions (or measurement) file may have: a measurement file's, and
+/// settings, each a number key of its test's table.
+pub fn check_conditions_columns(file: &str, head: &[String]) -> Result<()> {
+    let allowed: Vec<&str> = REQUIRED
+        .iter()
+        .chain(CONDITIONS.iter())
+        .chain(OPTIONAL.iter())
+        .copied()
+        .collect();
+    for h in head.iter().filter(|h| !allowed.contains(&h.as_str())) {
         let Some((test, key)) = setting_of(h) else {
-            unknown.push(h.as_str());
-            continue;
+            bail!(
+                "{file}: unknown column `{h}`; allowed: {}, and settings TEST.KEY (e.g. repose.drop_height)",
+                allowed.join(", ")
+            );
         };
         if let Some((_, condition)) = KEYS_OF_CONDITIONS.iter().find(|(k, _)| k == h) {
             bail!(
@@ -97,23 +97,6 @@ fn check_setting_columns<'h>(
                 )
             },
         )?;
-    }
-    Ok(unknown)
-}
-
-/// The columns a conditions file may have: a measurement file's, and settings.
-pub fn check_conditions_columns(file: &str, head: &[String]) -> Result<()> {
-    let allowed: Vec<&str> = REQUIRED
-        .iter()
-        .chain(CONDITIONS.iter())
-        .chain(OPTIONAL.iter())
-        .copied()
-        .collect();
-    if let Some(h) = check_setting_columns(file, head, &allowed)?.first() {
-        bail!(
-            "{file}: unknown column `{h}`; allowed: {}, and settings TEST.KEY (e.g. repose.drop_height)",
-            allowed.join(", ")
-        );
     }
     Ok(())
 }

@@ -342,11 +342,7 @@ impl Unscored {
         format!(
             "{} at {}: {}",
             self.test,
-            self.conditions
-                .iter()
-                .map(|(c, v)| format!("{c} {v}"))
-                .collect::<Vec<_>>()
-                .join(", "),
+            report::conditions_text(&self.conditions),
             self.why.join("; ")
         )
     }

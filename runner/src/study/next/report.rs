@@ -38,6 +38,15 @@ pub(super) fn write_conditions(path: &Path, options: &[Suggestion]) -> Result<()
     Ok(())
 }
 
+/// "NAME VALUE, ..." of a measurement's conditions.
+pub(super) fn conditions_text(conditions: &std::collections::BTreeMap<String, f64>) -> String {
+    conditions
+        .iter()
+        .map(|(c, v)| format!("{c} {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 fn named(rivals: &[String], strengths: &[f64]) -> String {
     rivals
         .iter()
@@ -91,11 +100,7 @@ pub(super) fn report(
             "| {} | {} | {} | {} | {:.2} | {:.2} | {} vs {} | {} |\n",
             k + 1,
             o.test,
-            o.conditions
-                .iter()
-                .map(|(c, v)| format!("{c} {v}"))
-                .collect::<Vec<_>>()
-                .join(", "),
+            conditions_text(&o.conditions),
             o.observables.len(),
             o.separation,
             o.power,
@@ -108,11 +113,7 @@ pub(super) fn report(
     md += &format!(
         "\nMeasure **{} at {}** next: `conditions.csv` holds it. Add the measurements to the data and diagnose again.",
         best.test,
-        best.conditions
-            .iter()
-            .map(|(c, v)| format!("{c} {v}"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        conditions_text(&best.conditions)
     );
     if best.power < 0.5 {
         md += " Even this one is more likely than not to leave them ambiguous: measure it with more specimens, or several of the list.";
