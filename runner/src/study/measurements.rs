@@ -14,8 +14,13 @@
 //! Everything is checked before any simulation starts, and every error names the file, the
 //! row (1-based, the header is row 1) and the column, with what is allowed: a missing
 //! column, an unknown test or observable, a condition the test needs left empty, a number
-//! that is not one, a non-positive uncertainty or replicate count, and (against a model) a
-//! condition outside the model's range.
+//! that is not one, a non-positive uncertainty, uncertainty_dof or replicate count, and
+//! (against a model) a condition outside the model's range.
+//!
+//! `uncertainty_dof` (optional) is the degrees of freedom of `uncertainty` when it is itself
+//! estimated (GUM's effective degrees of freedom; `synth` writes it for the scatter of its
+//! truth runs). Empty: the uncertainty is taken as exact. The chi^2 tests allow for it
+//! ([`tilth_tools::compare::welch`]).
 
 use crate::lab::model::Model;
 use anyhow::{Context, Result, anyhow, bail};
@@ -109,7 +114,7 @@ const KEYS_OF_CONDITIONS: [(&str, &str); 1] =
 const REQUIRED: [&str; 4] = ["test", "observable", "value", "unit"];
 
 /// Columns a file may have besides the required ones, conditions and settings.
-const OPTIONAL: [&str; 3] = ["uncertainty", "replicates", "source"];
+const OPTIONAL: [&str; 4] = ["uncertainty", "uncertainty_dof", "replicates", "source"];
 
 /// One measurement row.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -123,6 +128,8 @@ pub struct Measurement {
     pub unit: String,
     /// One standard deviation of the measured value, when known.
     pub uncertainty: Option<f64>,
+    /// Degrees of freedom of `uncertainty` when it is estimated; None: exact.
+    pub uncertainty_dof: Option<f64>,
     /// Tests the value averages, when known.
     pub replicates: Option<u32>,
     pub source: String,
@@ -324,6 +331,15 @@ pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
                 );
             }
         }
+        let uncertainty_dof = c.number("uncertainty_dof")?;
+        if let Some(d) = uncertainty_dof {
+            if !(d > 0.0) || uncertainty.is_none() {
+                bail!(
+                    "{}: `{d}` is not a count of degrees of freedom of an uncertainty: allowed > 0 beside an uncertainty, or empty when it is exact",
+                    c.at("uncertainty_dof")
+                );
+            }
+        }
         let replicates = match c.cell("replicates") {
             "" => None,
             s => match s.parse::<u32>() {
@@ -342,6 +358,7 @@ pub fn read_measurements(path: &Path) -> Result<Vec<Measurement>> {
             value,
             unit: unit.to_string(),
             uncertainty,
+            uncertainty_dof,
             replicates,
             source: c.cell("source").to_string(),
         });
@@ -372,22 +389,21 @@ pub fn check_against_model(rows: &[Measurement], model: &Model, path: &Path) -> 
     Ok(())
 }
 
-/// Writes rows in the same format (the header of data/li2022/measurements.csv).
+/// Writes rows in the same format (the header of data/li2022/measurements.csv, with
+/// `uncertainty_dof` after `uncertainty` when a row has one).
 pub fn write_measurements(path: &Path, rows: &[Measurement]) -> Result<()> {
     let mut w = csv::Writer::from_path(path)
         .with_context(|| format!("{}: cannot write", path.display()))?;
     let settings = setting_columns(rows);
+    let with_dof = rows.iter().any(|m| m.uncertainty_dof.is_some());
     let mut head: Vec<&str> = vec!["test"];
     head.extend(CONDITIONS);
     head.extend(settings.iter().map(String::as_str));
-    head.extend([
-        "observable",
-        "value",
-        "unit",
-        "uncertainty",
-        "replicates",
-        "source",
-    ]);
+    head.extend(["observable", "value", "unit", "uncertainty"]);
+    if with_dof {
+        head.push("uncertainty_dof");
+    }
+    head.extend(["replicates", "source"]);
     w.write_record(&head)?;
     for m in rows {
         let mut rec = vec![m.test.clone()];
@@ -407,6 +423,9 @@ pub fn write_measurements(path: &Path, rows: &[Measurement]) -> Result<()> {
         rec.push(format!("{}", m.value));
         rec.push(m.unit.clone());
         rec.push(m.uncertainty.map(|u| u.to_string()).unwrap_or_default());
+        if with_dof {
+            rec.push(m.uncertainty_dof.map(|d| d.to_string()).unwrap_or_default());
+        }
         rec.push(m.replicates.map(|n| n.to_string()).unwrap_or_default());
         rec.push(m.source.clone());
         w.write_record(&rec)?;

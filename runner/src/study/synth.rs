@@ -12,9 +12,10 @@
 //! the observable's unit) or `peak_shear_force_n=4%` (relative to the simulated value);
 //! `0` adds no noise. With `--replicates N` each value is the mean of N truth runs (a lab
 //! reports the mean of repeated tests) and `uncertainty` is sqrt(SD^2 + s^2 / N), s the runs'
-//! scatter. Several observables of one test at the same conditions (a conditions file with
-//! an `observable` column) share their runs. The DEM runs use seeds derived from S, and the noise its own stream,
-//! so the same S gives the same file. The runs are kept next to the output
+//! scatter, with its Welch-Satterthwaite degrees of freedom as `uncertainty_dof` (s^2 has
+//! N - 1 of them, SD is exact). Several observables of one test at the same conditions (a
+//! conditions file with an `observable` column) share their runs. The DEM runs use seeds
+//! derived from S, and the noise its own stream, so the same S gives the same file. The runs are kept next to the output
 //! (`D.runs/<test>/`, resumable) unless `--work` says where.
 
 use super::measurements::{
@@ -215,6 +216,7 @@ pub fn read_conditions(path: &Path) -> Result<Vec<Measurement>> {
             value: f64::NAN,
             unit: unit.to_string(),
             uncertainty: None,
+            uncertainty_dof: None,
             replicates: Some(1),
             source: String::new(),
         });
@@ -327,6 +329,13 @@ fn synth_into(args: &SynthArgs, out: &mut dyn Write) -> Result<()> {
         let se = scatter.map_or(0.0, |s| s / (values.len() as f64).sqrt());
         let u = sd.hypot(se);
         m.uncertainty = (u > 0.0).then_some(u);
+        let dof = tilth_tools::compare::welch::residual_dof(
+            scatter,
+            values.len(),
+            Some(sd).filter(|s| *s > 0.0),
+            None,
+        );
+        m.uncertainty_dof = (u > 0.0 && dof.is_finite()).then_some(dof);
         m.replicates = Some(args.replicates as u32);
         m.source = source.replace(',', ";");
     }

@@ -348,10 +348,34 @@ fn next_ranks_a_menu_and_writes_the_best_as_conditions() {
     );
 }
 
+/// The sum of the normal scores squared of a fit's rows, from its `z` and `z_dof` (null:
+/// exact).
+fn normal_scores_chi2(fit: &serde_json::Value) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+    let z = fit["z"].as_array().unwrap();
+    let dof = fit["z_dof"].as_array().unwrap();
+    assert_eq!(z.len(), dof.len(), "{fit}");
+    z.iter()
+        .zip(dof)
+        .map(|(z, d)| {
+            let z = z.as_f64().unwrap();
+            let q = match d.as_f64() {
+                None => z,
+                Some(nu) => {
+                    let tail = StudentsT::new(0.0, 1.0, nu).unwrap().sf(z.abs());
+                    -Normal::standard().inverse_cdf(tail) * z.signum()
+                }
+            };
+            q * q
+        })
+        .sum()
+}
+
 /// By default, the free parameter alone and every contender of the linear verdict with it
 /// are fitted on simulations into DIR/refit/; each contender is judged needed (its chi^2 drop
-/// from the free parameter's fit, Holm-corrected) and within the noise (P(chi^2_dof >
-/// chi^2), checked here in closed form for the even dof), and the verdict follows the fits:
+/// from the free parameter's fit, Holm-corrected) and within the noise (P(chi^2_dof > sum of
+/// the rows' normal scores squared), checked here in closed form for the even dof), and the
+/// verdict follows the fits:
 /// one both needed and within the noise is named with its fitted strength, several are
 /// ambiguous, none is none_of_the_candidates or no_effect; the linear verdict is kept beside
 /// it. The data: the study's model with its soil-soil surface energy 0.2 J/m^2 higher, and
@@ -426,9 +450,18 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
         assert_eq!(f["chi2"].as_f64(), Some(chi2), "{name}");
         assert_eq!(f["chi2_drop"].as_f64(), Some(free_chi2 - chi2), "{name}");
         // 8 rows, the free parameter and the contender: 6 degrees of freedom, and
-        // P(chi^2_6 > x) = e^{-x/2} (1 + x/2 + (x/2)^2 / 2).
+        // P(chi^2_6 > x) = e^{-x/2} (1 + x/2 + (x/2)^2 / 2), x the sum of the rows' normal
+        // scores squared: each z taken to the normal quantile of its tail under Student's t
+        // with the row's degrees of freedom (the runs' and the data's scatter from 2 runs).
         assert_eq!(dof, 6.0, "{name}");
-        let h = chi2 / 2.0;
+        let scores = normal_scores_chi2(&fit);
+        assert!(
+            (fit["chi2_scores"].as_f64().unwrap() - scores).abs() < 1e-9 * scores.max(1.0),
+            "{name}: {fit}"
+        );
+        // Student's t has the heavier tails: no score beyond its z.
+        assert!(scores <= chi2 * (1.0 + 1e-12), "{name}: {scores} > {chi2}");
+        let h = scores / 2.0;
         let p = (-h).exp() * (1.0 + h + h * h / 2.0);
         assert!(
             (f["p_value"].as_f64().unwrap() - p).abs() < 1e-9,

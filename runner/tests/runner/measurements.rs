@@ -108,6 +108,25 @@ fn a_non_positive_uncertainty_is_refused() {
 }
 
 #[test]
+fn a_bad_uncertainty_dof_is_refused() {
+    let head = HEAD.replace("uncertainty,", "uncertainty,uncertainty_dof,");
+    for (case, u, dof) in [
+        ("zero-dof", "0.5", "0"),
+        ("negative-dof", "0.5", "-3"),
+        ("dof-without-uncertainty", "", "3"),
+    ] {
+        refused(
+            case,
+            &format!("{head}\nrepose,6,,,repose_angle_deg,35.5,deg,{u},{dof},,\n"),
+            &[
+                "row 2, column uncertainty_dof",
+                "allowed > 0 beside an uncertainty",
+            ],
+        );
+    }
+}
+
+#[test]
 fn a_needed_condition_left_empty_is_named() {
     refused(
         "empty-condition",
@@ -415,6 +434,8 @@ fn synth_shares_runs_between_observables_and_averages_replicates() {
         "three observables at one condition: 2 runs, not 6"
     );
     let text = std::fs::read_to_string(&out).unwrap();
+    let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = text
         .lines()
         .skip(1)
@@ -422,7 +443,7 @@ fn synth_shares_runs_between_observables_and_averages_replicates() {
         .collect();
     assert_eq!(rows.len(), 3);
     for row in &rows {
-        let key = row[4];
+        let key = row[col("observable")];
         let v: Vec<f64> = runs
             .iter()
             .map(|r| r["experiment"][key].as_f64().unwrap())
@@ -430,18 +451,27 @@ fn synth_shares_runs_between_observables_and_averages_replicates() {
         let mean = 0.5 * (v[0] + v[1]);
         // Two values: s = |a - b| / sqrt(2), s / sqrt(2) = |a - b| / 2.
         let se = 0.5 * (v[0] - v[1]).abs();
-        let value: f64 = row[5].parse().unwrap();
-        let u: f64 = row[7].parse().unwrap();
-        assert_eq!(row[8], "2", "{key}: replicates");
+        let value: f64 = row[col("value")].parse().unwrap();
+        let u: f64 = row[col("uncertainty")].parse().unwrap();
+        let dof: f64 = row[col("uncertainty_dof")].parse().unwrap();
+        assert_eq!(row[col("replicates")], "2", "{key}: replicates");
         if key == "tray_mass_g" {
             assert!((u - 0.5f64.hypot(se)).abs() < 1e-9 * u, "{key}: {u}");
             assert!((value - mean).abs() < 5.0 * 0.5, "{key}: noise beyond 5 SD");
+            // Welch-Satterthwaite: (0.5^2 + se^2)^2 / (se^4 / 1), the noise exact.
+            let want = u.powi(4) / se.powi(4);
+            assert!(
+                (dof - want).abs() < 1e-9 * want,
+                "{key}: dof {dof} vs {want}"
+            );
         } else {
             assert!(
                 (value - mean).abs() <= 1e-9 * mean.abs(),
                 "{key}: {value} vs {mean}"
             );
             assert!((u - se).abs() <= 1e-9 * se, "{key}: {u} vs {se}");
+            // All of u is the scatter of 2 runs: 1 degree of freedom.
+            assert!((dof - 1.0).abs() < 1e-9, "{key}: dof {dof}");
         }
     }
     // A reading the test does not give is refused, naming the ones it does.

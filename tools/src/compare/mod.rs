@@ -17,6 +17,7 @@
 //! Probability for Engineers, ch. 11 for the slope test).
 
 pub mod plot;
+pub mod welch;
 
 use serde::Serialize;
 use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};

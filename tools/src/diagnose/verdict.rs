@@ -22,8 +22,11 @@
 //!    effect. Any rival makes the verdict `ambiguous` with the set {best} + rivals;
 //! 3. no rival: the best joins S, and step 1 runs again, so a second effect is named only
 //!    when it is needed beyond the first;
-//! 4. the misfit left by S (with the first of an ambiguous set in it): |M_S r|^2 against
-//!    chi^2(m - rank X_S). Significant:
+//! 4. the misfit left by S (with the first of an ambiguous set in it): |M_S r|^2, each row's
+//!    e_i = (M_S r)_i taken to its normal score as sqrt(h_i) q(e_i / sqrt(h_i), nu_i), h_i =
+//!    (M_S)_ii and nu_i the degrees of freedom of the row's standard error (a row's
+//!    standard error estimated from a few runs gives its z Student's t tails:
+//!    [`crate::compare::welch`]), against chi^2(m - rank X_S). Significant:
 //!    `none_of_the_candidates` (what is left is no candidate's signature), before any
 //!    ambiguity; otherwise `ambiguous`, `effect` with the candidates added, or `no_effect`.
 //!
@@ -32,6 +35,7 @@
 //! leaves. `tilth fit` then fits the verdict's effects on simulations and tests its chi^2.
 
 use super::{Candidate, JacobianNoise, ResidualMaker, Score, holm_adjust};
+use crate::compare::welch::normal_score;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -80,7 +84,7 @@ pub struct Encompassing {
 /// The misfit the named effects and the free parameters leave (linearised).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Misfit {
-    /// |M_S r|^2.
+    /// |M_S r|^2 in normal scores (equal to it when every row's standard error is exact).
     pub chi2: f64,
     /// What the free parameters' finite-difference noise would leak into it if their shift
     /// b were real: sum_i b'C_i b (m - q) / m. Reported, not taken off: b is fitted with
@@ -189,10 +193,23 @@ impl Columns {
         (statistic, chi2_sf(statistic, 1.0), gr / gg)
     }
 
-    fn misfit(&self, r: &DVector<f64>, base: &[usize]) -> Misfit {
+    fn misfit(&self, r: &DVector<f64>, base: &[usize], residual_dof: &[f64]) -> Misfit {
         let xs = self.select(base);
         let maker = ResidualMaker::new(&xs);
-        let chi2 = maker.apply(r).norm_squared();
+        let e = maker.apply(r);
+        let chi2: f64 = (0..r.len())
+            .map(|i| {
+                let nu = residual_dof.get(i).copied().unwrap_or(f64::INFINITY);
+                if nu.is_infinite() {
+                    return e[i] * e[i];
+                }
+                let h = maker.apply(&DVector::from_fn(r.len(), |k, _| f64::from(k == i)))[i];
+                if h <= 1e-12 {
+                    return e[i] * e[i];
+                }
+                h * normal_score(e[i] / h.sqrt(), nu).powi(2)
+            })
+            .sum();
         let dof = r.len().saturating_sub(maker.rank());
         let b = maker.coefficients(r).unwrap_or_else(|| DVector::zeros(0));
         // E|M Ê b|^2 = sum_i b' C_i b times the share of each row M keeps, (m - q) / m.
@@ -239,11 +256,13 @@ fn chi2_sf(x: f64, dof: f64) -> f64 {
     ChiSquared::new(dof).expect("positive dof").sf(x)
 }
 
-/// The verdict on the residuals `residual` (standardised) given the free parameters'
+/// The verdict on the residuals `residual` (standardised, each row's standard error with
+/// `residual_dof` degrees of freedom; empty: all exact) given the free parameters'
 /// Jacobian `jacobian`, its noise and the candidates, as [`super::score_tests`] takes them;
 /// `scores` is its output (only identifiable candidates take part).
 pub fn verdict(
     residual: &[f64],
+    residual_dof: &[f64],
     jacobian: &DMatrix<f64>,
     noise: &JacobianNoise,
     candidates: &[Candidate],
@@ -317,7 +336,7 @@ pub fn verdict(
         })
         .collect();
     let with_best: Vec<usize> = base.iter().copied().chain(first_of_ambiguous).collect();
-    let misfit = cols.misfit(&r, &with_best);
+    let misfit = cols.misfit(&r, &with_best, residual_dof);
     Verdict {
         verdict: kind(&misfit, &ambiguous, &effects, alpha),
         effects,

@@ -8,7 +8,8 @@
 //! Each variant is a model file in `DIR/models/` and a resumable sweep per test in
 //! `DIR/runs/<variant>/`. From the row means: residuals, the free parameters' Jacobian and
 //! each candidate's sensitivity, standardised by each row's standard error
-//! (sqrt(uncertainty^2 + scatter^2 / replicates)); from the per-seed slopes, the noise of
+//! (sqrt(uncertainty^2 + scatter^2 / replicates), the scatter pooled over the variants);
+//! from the per-seed slopes, the noise of
 //! every finite difference (the candidates' variances, the free parameters' covariances);
 //! then the score test of [`tilth_tools::diagnose`]. Writes `DIR/diagnosis.json` (`candidates` best first: `name`,
 //! `statistic`, `p_value`, `strength`, `predicted_rmse_drop`, `identifiable`, ...) and
@@ -461,6 +462,7 @@ fn write_json(
             "simulated": means[0][i],
             "standard_error": se,
             "residual_z": lin.residual[r],
+            "residual_dof": Some(lin.residual_dof[r]).filter(|d| d.is_finite()),
         })).collect::<Vec<_>>(),
     });
     std::fs::write(
@@ -529,13 +531,20 @@ fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     };
     let Standardised {
         residual,
+        residual_dof,
         x,
         noise,
         candidates,
     } = &lin;
     let scores = score_tests(residual, x, noise, candidates);
     let verdict = tilth_tools::diagnose::verdict::verdict(
-        residual, x, noise, candidates, &scores, args.alpha,
+        residual,
+        residual_dof,
+        x,
+        noise,
+        candidates,
+        &scores,
+        args.alpha,
     );
     let absorbed = tilth_tools::diagnose::absorbed(residual, x);
     let shift = tilth_tools::diagnose::recalibration(residual, x);

@@ -12,7 +12,9 @@
 //! positive strength). Each contender gets three tests:
 //! - needed: the drop of chi^2 from the null fit, D = chi^2_free - chi^2_C, against
 //!   chi^2(1) (conservative at a strength bounded at 0), Holm-corrected over the contenders;
-//! - within the noise: P(chi^2_dof > chi^2_C) >= alpha, the verdict's misfit test;
+//! - within the noise: P(chi^2_dof > Q_C) >= alpha, the verdict's misfit test, Q_C the sum
+//!   of the rows' normal scores squared (`tilth fit`'s `chi2_scores`: it allows for standard
+//!   errors estimated from a few runs, [`tilth_tools::compare::welch`]);
 //! - excluded: its fit is worse than the best needed contender's row by row (Vuong's test,
 //!   Holm-corrected over the others).
 //!
@@ -45,8 +47,10 @@ pub struct Contender {
     pub strength: f64,
     pub standard_error: Option<f64>,
     pub chi2: f64,
+    /// The rows' normal scores' sum of squares: what the misfit test takes.
+    pub chi2_scores: f64,
     pub dof: f64,
-    /// P(chi^2_dof > chi2).
+    /// P(chi^2_dof > chi2_scores).
     pub p_value: f64,
     /// chi^2 of the free parameters' fit minus this fit's.
     pub chi2_drop: f64,
@@ -71,6 +75,7 @@ pub struct Contender {
 #[derive(Debug, Clone, Serialize)]
 pub struct NullFit {
     pub chi2: f64,
+    pub chi2_scores: f64,
     pub dof: f64,
     pub p_value: f64,
     pub within_noise: bool,
@@ -96,6 +101,7 @@ impl Contender {
             strength: f64::NAN,
             standard_error: None,
             chi2: f64::NAN,
+            chi2_scores: f64::NAN,
             dof: f64::NAN,
             p_value: f64::NAN,
             chi2_drop: f64::NAN,
@@ -153,9 +159,11 @@ fn chi2_sf(x: f64, dof: f64) -> f64 {
     ChiSquared::new(dof.max(1.0)).map_or(f64::NAN, |d| d.sf(x))
 }
 
-/// What one fit left: chi^2, dof, and the last parameter's estimate and standard error.
+/// What one fit left: chi^2 (and its normal scores' sum, the misfit test's), dof, and the
+/// last parameter's estimate and standard error.
 struct Fitted {
     chi2: f64,
+    chi2_scores: f64,
     dof: f64,
     estimate: f64,
     standard_error: Option<f64>,
@@ -172,8 +180,10 @@ fn read_fit(dir: &Path) -> Result<Fitted> {
             .and_then(|a| a.last())
             .and_then(|v| v.as_f64())
     };
+    let chi2 = j["chi2"].as_f64().unwrap_or(f64::NAN);
     Ok(Fitted {
-        chi2: j["chi2"].as_f64().unwrap_or(f64::NAN),
+        chi2,
+        chi2_scores: j["chi2_scores"].as_f64().unwrap_or(chi2),
         dof: j["dof"].as_f64().unwrap_or(f64::NAN),
         estimate: last("estimate").unwrap_or(f64::NAN),
         standard_error: last("standard_error"),
@@ -256,8 +266,12 @@ fn refitted_verdict(
         _ => vec![],
     };
     let misfit = match best {
-        Some(c) => (c.chi2, c.dof, c.p_value),
-        None => (refits.free.chi2, refits.free.dof, refits.free.p_value),
+        Some(c) => (c.chi2_scores, c.dof, c.p_value),
+        None => (
+            refits.free.chi2_scores,
+            refits.free.dof,
+            refits.free.p_value,
+        ),
     };
     let misfit = Misfit {
         chi2: misfit.0,
@@ -348,7 +362,7 @@ pub(super) fn refit(
     // Each contender's fit starts where the free parameters' ended (the fitted model), so
     // that it begins at the null model's chi^2 shifted only by the contender.
     let free_model = free_dir.join("model.toml");
-    let free_p = chi2_sf(free.chi2, free.dof);
+    let free_p = chi2_sf(free.chi2_scores, free.dof);
     let mut fits = vec![];
     for d in &chosen {
         say(&format!("{} with the free parameters", d.score.name));
@@ -364,13 +378,14 @@ pub(super) fn refit(
                 continue;
             }
         };
-        let p_value = chi2_sf(f.chi2, f.dof);
+        let p_value = chi2_sf(f.chi2_scores, f.dof);
         fits.push(Contender {
             name: d.score.name.clone(),
             param,
             strength: f.estimate,
             standard_error: f.standard_error,
             chi2: f.chi2,
+            chi2_scores: f.chi2_scores,
             dof: f.dof,
             p_value,
             chi2_drop: free.chi2 - f.chi2,
@@ -402,6 +417,7 @@ pub(super) fn refit(
     let refits = Refits {
         free: NullFit {
             chi2: free.chi2,
+            chi2_scores: free.chi2_scores,
             dof: free.dof,
             p_value: free_p,
             within_noise: free_p >= args.alpha,
@@ -433,6 +449,7 @@ mod tests {
             strength: 0.1,
             standard_error: Some(0.01),
             chi2,
+            chi2_scores: chi2,
             dof: 14.0,
             p_value,
             chi2_drop: 20.0,
@@ -452,6 +469,7 @@ mod tests {
         Refits {
             free: NullFit {
                 chi2: free_chi2,
+                chi2_scores: free_chi2,
                 dof: 15.0,
                 p_value,
                 within_noise: p_value >= 0.01,

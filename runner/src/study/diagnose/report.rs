@@ -243,9 +243,10 @@ fn not_excluded(r: &Refits, out: &std::path::Path) -> String {
 fn refit_table(r: &Refits, alpha: f64) -> String {
     let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();
     let mut md = format!(
-        "Refitted on simulations (`tilth fit` in DIR/refit/; --no-refit skips it): the free parameters alone leave chi^2 {:.1} on {} degrees of freedom (p {}); each contender fitted with them:\n\n\
-         | contender | fitted strength | standard error | chi^2 | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise | p no worse than the best (Holm) | excluded |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "Refitted on simulations (`tilth fit` in DIR/refit/; --no-refit skips it): the free parameters alone leave chi^2 {:.1} ({:.1} in normal scores) on {} degrees of freedom (p {}); each contender fitted with them:\n\n\
+         | contender | fitted strength | standard error | chi^2 (normal scores) | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise | p no worse than the best (Holm) | excluded |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         r.free.chi2,
+        r.free.chi2_scores,
         r.free.dof,
         p(r.free.p_value)
     );
@@ -259,11 +260,12 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
             continue;
         }
         md += &format!(
-            "| {} | {:.4} | {} | {:.1} | {} | {} | {:.1} | {} | {} | {} | {} | {} |\n",
+            "| {} | {:.4} | {} | {:.1} ({:.1}) | {} | {} | {:.1} | {} | {} | {} | {} | {} |\n",
             c.name,
             c.strength,
             c.standard_error.map_or("-".into(), |s| format!("{s:.4}")),
             c.chi2,
+            c.chi2_scores,
             c.dof,
             p(c.p_value),
             c.chi2_drop,
@@ -275,7 +277,7 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
         );
     }
     md + &format!(
-        "\nNeeded: the drop from the free parameters' fit against chi^2(1), Holm-corrected, under {alpha}; within the noise: p >= {alpha}. Excluded: its fit is worse than the best needed one's beyond doubt, row by row (Vuong's test, Holm-corrected, under {alpha}). The verdict below is the fits': the best needed contender, if within the noise, is named when every other needed one is excluded, and is ambiguous with those that are not; none is none of the candidates (or no effect when none is needed and the free parameters' fit is within the noise).\n\n"
+        "\nNeeded: the drop from the free parameters' fit against chi^2(1), Holm-corrected, under {alpha}; within the noise: p >= {alpha}, from the normal scores' chi^2, which allows for standard errors estimated from a few runs each (a row's z then has Student's t tails: `tilth_tools::compare::welch`). Excluded: its fit is worse than the best needed one's beyond doubt, row by row (Vuong's test, Holm-corrected, under {alpha}). The verdict below is the fits': the best needed contender, if within the noise, is named when every other needed one is excluded, and is ambiguous with those that are not; none is none of the candidates (or no effect when none is needed and the free parameters' fit is within the noise).\n\n"
     )
 }
 

@@ -88,8 +88,9 @@ pub(super) struct Simulations {
     pub means: Vec<Vec<Option<f64>>>,
     /// The values of a row's replicates that finished, seed by seed.
     pub values: Vec<Vec<Vec<f64>>>,
-    /// The standard deviation of each row's replicates in "base", the simulation's scatter.
-    pub base_scatter: Vec<Option<f64>>,
+    /// Each row's scatter, the standard deviation of its replicates, pooled over the variants
+    /// (each a small step from "base", so they share it), with its degrees of freedom.
+    pub scatter: Vec<Option<(f64, f64)>>,
     /// The first reason a row has no value in some variant.
     pub problems: BTreeMap<usize, String>,
 }
@@ -131,15 +132,11 @@ pub(super) fn simulate_variants(
     let mut means: Vec<Vec<Option<f64>>> = vec![];
     let mut values: Vec<Vec<Vec<f64>>> = vec![];
     let mut problems: BTreeMap<usize, String> = BTreeMap::new();
-    let mut base_scatter: Vec<Option<f64>> = vec![];
     for (k, Variant { name, .. }) in variants.iter().enumerate() {
         if !args.lab.quiet {
             eprintln!("variant {} of {}: {name}", k + 1, variants.len());
         }
         let sims = simulate(rows, &hows[k], &stop)?;
-        if k == 0 {
-            base_scatter = sims.iter().map(|(v, _)| mean_sd(v).1).collect();
-        }
         // Only replicates that finished in every variant would be fairer; a failed run
         // is reported and its row dropped by `usable_rows`.
         means.push(
@@ -162,12 +159,38 @@ pub(super) fn simulate_variants(
         }
         values.push(sims.into_iter().map(|(v, _)| v).collect());
     }
+    let scatter = (0..rows.len())
+        .map(|i| pooled_scatter(values.iter().map(|v| v[i].as_slice()), args.replicates))
+        .collect();
     Ok(Simulations {
         means,
         values,
-        base_scatter,
+        scatter,
         problems,
     })
+}
+
+/// The standard deviation of the runs pooled over groups, each group's runs about its own
+/// mean: sqrt(sum (x - mean_g)^2 / sum (n_g - 1)), over the groups with all `replicates`
+/// runs, and the degrees of freedom it is credited with. With R = 4 one group's scatter has
+/// 3, and a residual standardised by it has Student's t tails (variance 3) that inflate
+/// every test. The first group ("base", seeds 1..R) is independent of the others, which
+/// share seeds R+1..2R (common random numbers), so their scatters are not independent of
+/// each other: the credit is that of two groups, 2 (R - 1), a lower bound; the estimate
+/// itself averages them all.
+fn pooled_scatter<'a>(
+    groups: impl Iterator<Item = &'a [f64]>,
+    replicates: usize,
+) -> Option<(f64, f64)> {
+    let (mut squares, mut dof, mut full) = (0.0, 0.0, 0usize);
+    for g in groups.filter(|g| g.len() == replicates && g.len() > 1) {
+        let mean = g.iter().sum::<f64>() / g.len() as f64;
+        squares += g.iter().map(|x| (x - mean).powi(2)).sum::<f64>();
+        dof += (g.len() - 1) as f64;
+        full += 1;
+    }
+    let credit = full.min(2) as f64 * replicates.saturating_sub(1) as f64;
+    (dof > 0.0).then(|| ((squares / dof).sqrt(), credit))
 }
 
 /// The rows a diagnosis uses and those it drops.
@@ -180,7 +203,7 @@ pub(super) struct Usable {
 }
 
 /// Sorts the rows into used and dropped. The standard error is
-/// sqrt(uncertainty^2 + scatter^2 / replicates), the scatter that of "base".
+/// sqrt(uncertainty^2 + scatter^2 / replicates), the scatter pooled over the variants.
 pub(super) fn usable_rows(
     args: &DiagnoseArgs,
     rows: &[Measurement],
@@ -189,7 +212,7 @@ pub(super) fn usable_rows(
     let mut used = vec![];
     let mut dropped = vec![];
     for (i, m) in rows.iter().enumerate() {
-        let se = std_error(sims.base_scatter[i], args.replicates, m.uncertainty);
+        let se = std_error(sims.scatter[i].map(|s| s.0), args.replicates, m.uncertainty);
         if sims.means.iter().any(|v| v[i].is_none()) {
             dropped.push(format!(
                 "row {}: a run failed ({})",
@@ -212,4 +235,24 @@ pub(super) fn usable_rows(
         );
     }
     Ok(Usable { used, dropped })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pooled_scatter;
+
+    #[test]
+    fn the_pooled_scatter_is_each_group_about_its_own_mean() {
+        // Groups {1, 3} and {10, 14}: squares 2 + 8 over 1 + 1 degrees of freedom; a group
+        // with a run missing is left out.
+        let groups: [&[f64]; 3] = [&[1.0, 3.0], &[10.0, 14.0], &[5.0]];
+        let (sd, dof) = pooled_scatter(groups.into_iter(), 2).unwrap();
+        assert!((sd - 5f64.sqrt()).abs() < 1e-12, "{sd}");
+        assert_eq!(dof, 2.0);
+        // Ten groups of four are credited with two groups' 6, not 30.
+        let four: Vec<Vec<f64>> = (0..10).map(|k| vec![0.0, 1.0, 2.0, f64::from(k)]).collect();
+        let (_, dof) = pooled_scatter(four.iter().map(Vec::as_slice), 4).unwrap();
+        assert_eq!(dof, 6.0);
+        assert!(pooled_scatter([&[2.0][..]].into_iter(), 1).is_none());
+    }
 }

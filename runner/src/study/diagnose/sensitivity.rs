@@ -5,6 +5,7 @@ use super::runs::{Simulations, Variant};
 use crate::study::measurements::Measurement;
 use nalgebra::DMatrix;
 use tilth_tools::compare::mean_sd;
+use tilth_tools::compare::welch::welch_dof;
 use tilth_tools::diagnose::{Candidate, JacobianNoise};
 
 /// Finite differences of the variants against "base-fd" (variant 1), paired by seed, over
@@ -57,6 +58,9 @@ impl Differences<'_> {
 pub(super) struct Standardised {
     /// (measured - simulated in "base") / se.
     pub residual: Vec<f64>,
+    /// The degrees of freedom of each se^2 (Welch-Satterthwaite: the runs' pooled scatter
+    /// and the measurement's `uncertainty_dof`; infinite when exact).
+    pub residual_dof: Vec<f64>,
     /// The free parameters' Jacobian, a column per free parameter.
     pub x: DMatrix<f64>,
     /// The free parameters' slopes' covariances, and the candidates' with them.
@@ -78,6 +82,21 @@ pub(super) fn standardise(
         .used
         .iter()
         .map(|&(i, s)| (rows[i].value - means[0][i].unwrap()) / s)
+        .collect();
+    let residual_dof: Vec<f64> = fd
+        .used
+        .iter()
+        .map(|&(i, _)| {
+            let m = &rows[i];
+            let runs = fd.sims.values[0][i].len() as f64;
+            welch_dof(&[
+                fd.sims.scatter[i].map_or((0.0, 0.0), |(s, dof)| (s * s / runs, dof)),
+                (
+                    m.uncertainty.map_or(0.0, |u| u * u),
+                    m.uncertainty_dof.unwrap_or(f64::INFINITY),
+                ),
+            ])
+        })
         .collect();
     let noise = JacobianNoise::from_seeds(
         &(0..n_params)
@@ -101,6 +120,7 @@ pub(super) fn standardise(
         .collect();
     Standardised {
         residual,
+        residual_dof,
         x,
         noise,
         candidates,

@@ -52,6 +52,8 @@ pub(super) struct Best {
     /// The rows' simulated means and their standard errors.
     pub(super) centre: Vec<f64>,
     pub(super) se: Vec<f64>,
+    /// The degrees of freedom of each se^2 (the fit's misfit test allows for them).
+    pub(super) dof: Vec<f64>,
     /// The Jacobian (standardised by `se`) and the noise it carries into J'J
     /// (`jacobian_noise.rs`).
     pub(super) jac: DMatrix<f64>,
@@ -62,8 +64,7 @@ impl Best {
     fn at(
         theta: &[f64],
         chi2: f64,
-        centre: Vec<f64>,
-        se: Vec<f64>,
+        (centre, se, dof): (Vec<f64>, Vec<f64>, Vec<f64>),
         (jac, noise): (DMatrix<f64>, DMatrix<f64>),
     ) -> Best {
         Best {
@@ -71,6 +72,7 @@ impl Best {
             chi2,
             centre,
             se,
+            dof,
             jac,
             noise,
         }
@@ -154,6 +156,7 @@ impl State {
             centre,
             se,
             z,
+            dof: row_dof,
             chi2,
             seeds: centre_seeds,
         } = p.evaluate(it, &self.theta)?;
@@ -176,7 +179,8 @@ impl State {
                     .take()
                     .map(|b| (b.jac, b.noise))
                     .unwrap_or_else(|| (DMatrix::zeros(p.rows.len(), n), DMatrix::zeros(n, n)));
-                self.best = Some(Best::at(&self.theta, chi2, centre, se, (jac, noise)));
+                let rows = (centre, se, row_dof);
+                self.best = Some(Best::at(&self.theta, chi2, rows, (jac, noise)));
                 return Ok(Some(Stop::Iterations));
             }
             let (jac, noise) = jacobian(p, it, &self.theta, &centre, &se, &centre_seeds)?;
@@ -185,7 +189,8 @@ impl State {
                 .last_mut()
                 .expect("pushed above")
                 .predicted_gain = gain;
-            self.best = Some(Best::at(&self.theta, chi2, centre, se, (jac, noise)));
+            let rows = (centre, se, row_dof);
+            self.best = Some(Best::at(&self.theta, chi2, rows, (jac, noise)));
             if at_noise(chi2, dof, gain, n) && !args.to_minimum {
                 if !args.lab.quiet {
                     eprintln!(

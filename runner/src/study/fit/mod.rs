@@ -30,6 +30,12 @@
 //! `--to-minimum` keeps stepping. It also stops when every step is under 1 % of its range,
 //! or after `--iterations`.
 //!
+//! The misfit test at the estimate (`chi2_scores` and `p_value` in fit.json; diagnose's
+//! refit reads them) maps each z to the normal score with its tail probability under
+//! Student's t with the row's Welch-Satterthwaite degrees of freedom (R - 1 from the runs,
+//! the measurement's `uncertainty_dof`), [`tilth_tools::compare::welch`]: with R = 4, sum
+//! z^2 against chi^2(dof) rejects a right model far more often than its level says.
+//!
 //! Writes `DIR/fit.json` (estimate, standard errors, correlations, the history),
 //! `DIR/fit.md`, and `DIR/model.toml`: the model with the fitted parameters, ready for
 //! `tilth compare`. Runs go to `DIR/runs/iter-K/<variant>/` and resume.

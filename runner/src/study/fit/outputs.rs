@@ -2,15 +2,17 @@
 //! fitted parameters), `DIR/fit.json` and `DIR/fit.md`.
 
 use super::jacobian_noise::covariance;
-use super::levenberg_marquardt::Fitted;
+use super::levenberg_marquardt::{Best, Fitted};
 use super::params::{apply, describe, show};
 use super::rmse;
 use super::simulations::{Problem, residuals};
 use crate::lab::model::Model;
 use anyhow::{Context, Result};
 use nalgebra::DMatrix;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::io::Write;
 use std::path::PathBuf;
+use tilth_tools::compare::welch::normal_chi2;
 
 /// The estimate's uncertainty, from the covariance (J'J - N)^-1 scale, with N the noise the
 /// finite-difference Jacobian carries into J'J and scale = max(1, chi^2 / dof).
@@ -88,6 +90,15 @@ fn write_model(p: &Problem, theta: &[f64]) -> Result<PathBuf> {
     Ok(model_out)
 }
 
+/// The misfit test at the estimate: sum of the rows' normal scores squared, and
+/// P(chi^2_dof > it).
+fn misfit(rows: &[crate::study::measurements::Measurement], best: &Best, dof: usize) -> (f64, f64) {
+    let z = residuals(rows, &best.centre, &best.se);
+    let x = normal_chi2(&z, &best.dof);
+    let p = ChiSquared::new(dof.max(1) as f64).map_or(f64::NAN, |d| d.sf(x));
+    (x, p)
+}
+
 /// `fit.json`: the estimate, its uncertainty and the history.
 fn json(
     p: &Problem,
@@ -100,6 +111,7 @@ fn json(
     let best = &fitted.best;
     let noise = &best.noise;
     let first = &fitted.history[0];
+    let misfit = misfit(rows, best, dof);
     serde_json::json!({
         "model": args.model.display().to_string(),
         "data": args.data.display().to_string(),
@@ -117,6 +129,12 @@ fn json(
         // sum of squares (diagnose's refit compares fits row by row).
         "z": residuals(rows, &best.centre, &best.se),
         "dof": dof,
+        // Each z's degrees of freedom (its standard error is estimated from the runs'
+        // scatter and, for synthetic data, the truth's): the misfit test is on the normal
+        // scores of the z, sum q^2 (`tilth_tools::compare::welch`).
+        "z_dof": best.dof.iter().map(|d| d.is_finite().then_some(*d)).collect::<Vec<_>>(),
+        "chi2_scores": misfit.0,
+        "p_value": misfit.1,
         "rmse_start": first.rmse,
         "rmse": rmse(rows, &best.centre),
         "history": fitted.history,
@@ -163,10 +181,13 @@ fn report(
         md += " Not determined: once that noise is taken off, the runs do not show how the readings move with the parameters; more replicates (`--replicates`) would.";
     }
     md += "\n";
+    let (scores, p_value) = misfit(rows, best, dof);
     md += &format!(
-        "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}). {}\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
+        "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}); the misfit test, which allows for standard errors estimated from {} runs (the normal scores' sum of squares, {scores:.2}): p = {}. {}\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
         best.chi2,
         first.chi2,
+        args.replicates,
+        tilth_tools::compare::p_text(p_value),
         fitted.stopped.say(args.iterations)
     );
     let end = rmse(rows, &best.centre);

@@ -11,6 +11,7 @@ use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use tilth_tools::compare::welch::residual_dof;
 use tilth_tools::compare::{mean_sd, std_error};
 
 /// What every setting of one fit shares: the command's arguments, the starting model, the
@@ -52,6 +53,8 @@ pub(super) struct Evaluated {
     pub(super) se: Vec<f64>,
     /// Each row's standardised residual, z = (measured - simulated) / se.
     pub(super) z: Vec<f64>,
+    /// Each row's degrees of freedom of se^2 (Welch-Satterthwaite; infinite when exact).
+    pub(super) dof: Vec<f64>,
     /// chi^2 = sum z^2.
     pub(super) chi2: f64,
     /// Each row's values, seed by seed (for the Jacobian's noise).
@@ -163,12 +166,18 @@ impl Problem<'_> {
                     .unwrap_or(1.0)
             })
             .collect();
+        let dof: Vec<f64> = rows
+            .iter()
+            .zip(&scatter)
+            .map(|(m, s)| residual_dof(*s, self.args.replicates, m.uncertainty, m.uncertainty_dof))
+            .collect();
         let z = residuals(rows, &centre, &se);
         let chi2: f64 = z.iter().map(|v| v * v).sum();
         Ok(Evaluated {
             centre,
             se,
             z,
+            dof,
             chi2,
             seeds,
         })

@@ -83,7 +83,15 @@ impl Problem {
             .collect();
         let noise = JacobianNoise::default();
         let scores = score_tests(r.as_slice(), &self.x, &noise, &candidates);
-        verdict(r.as_slice(), &self.x, &noise, &candidates, &scores, ALPHA)
+        verdict(
+            r.as_slice(),
+            &[],
+            &self.x,
+            &noise,
+            &candidates,
+            &scores,
+            ALPHA,
+        )
     }
 }
 
@@ -256,4 +264,35 @@ fn an_encompassing_statistic_is_the_projection_formula() {
         .find(|e| e.needed == "alike" && e.given == "a")
         .unwrap();
     assert!(back.statistic < 1e-9, "{}", back.statistic);
+}
+
+#[test]
+fn the_misfit_test_allows_for_standard_errors_from_four_runs() {
+    // Each row's standard error estimated from R = 4 runs alone: z = N(0, 1) / sqrt(chi^2_3
+    // / 3), Student's t with 3 degrees of freedom, and no effect. 1000 draws of the misfit
+    // the free parameter leaves.
+    let p = problem(8);
+    let cols = Columns::new(&p.x, &JacobianNoise::default(), &[]);
+    let mut rng = ChaCha8Rng::seed_from_u64(88);
+    let chi3 = rand_distr::ChiSquared::<f64>::new(3.0).unwrap();
+    let dof = vec![3.0; ROWS];
+    let (mut raw, mut scored) = (0, 0);
+    for _ in 0..1000 {
+        let r = DVector::from_iterator(
+            ROWS,
+            (0..ROWS).map(|_| {
+                let n: f64 = StandardNormal.sample(&mut rng);
+                n / (chi3.sample(&mut rng) / 3.0).sqrt()
+            }),
+        );
+        raw += usize::from(cols.misfit(&r, &[0], &[]).p_value < ALPHA);
+        scored += usize::from(cols.misfit(&r, &[0], &dof).p_value < ALPHA);
+    }
+    // With the rows' t tails mapped to normal scores the rate is 0.014 (the scores of a
+    // projection are nearly, not exactly, normal: 1e5 draws in scipy); P(Bin(1000, 0.0141)
+    // > 30) = 5.9e-5.
+    assert!(scored <= 30, "{scored} of 1000 right models rejected");
+    // Taken as N(0, 1), a right model is rejected at a rate of 0.72 (scipy, as above): the
+    // failure the degrees of freedom are there for. P(Bin(1000, 0.717) < 600) = 7.5e-16.
+    assert!(raw >= 600, "only {raw} of 1000 rejected without the dof");
 }
