@@ -79,11 +79,13 @@ fn diagnosis(out: &std::process::Output, out_dir: &Path) -> serde_json::Value {
 fn a_candidate_the_free_parameters_reproduce_is_absorbed_not_discovered() {
     // A candidate that raises the free parameter by the same step as its finite difference
     // (5 % of the range 0..0.5 = 0.025, exact in binary).
+    // The step kept at 5 % (--longest-param-step): lengthened, it would no longer be the
+    // candidate's.
     let (dir, model_path, data) = absorbed_case("diagnose-absorbed", "0.025");
     let out = run_diagnose(
         (&model_path, &data, &dir.join("out")),
         "more_rolling,capillary",
-        &[],
+        &["--longest-param-step", "0.05"],
     );
     let json = diagnosis(&out, &dir.join("out"));
     let cands = json["candidates"].as_array().unwrap();
@@ -182,12 +184,80 @@ fn param_step_sets_the_free_parameters_finite_difference() {
     assert_eq!(more["significant"], false, "{more}");
     assert!(more["distinct_fraction"].as_f64().unwrap() < 1e-9, "{more}");
     assert_eq!(json["param_step"].as_f64(), Some(0.2), "{json}");
+    // Twice 20 % is beyond the longest step (20 %): kept.
+    assert_eq!(
+        json["recalibration"][0]["step"].as_f64(),
+        Some(0.2),
+        "{json}"
+    );
     let md = std::fs::read_to_string(out_dir.join("diagnosis.md")).unwrap();
     assert!(
-        md.contains(
-            "soil-soil.rolling_friction (slopes from finite differences of 20 % of each range)"
-        ),
+        md.contains("soil-soil.rolling_friction (slopes from finite differences of 20 % of each range, lengthened up to 20 %"),
         "{md}"
+    );
+}
+
+/// A free parameter whose slope over its first step is mostly the runs' noise is measured
+/// again over twice the step, up to --longest-param-step: at the end each parameter's
+/// noise share is at most a tenth, or its step could not double again; a lengthened step
+/// has its own model file and runs, and `next` reads the diagnosis back.
+#[test]
+fn a_free_parameters_step_is_lengthened_while_noise_hides_its_effect() {
+    let (dir, model_path, data) = absorbed_case("diagnose-lengthened", "0.1");
+    let out_dir = dir.join("out");
+    let out = run_diagnose(
+        (&model_path, &data, &out_dir),
+        "capillary,twisting",
+        &["--param-step", "0.0125", "--longest-param-step", "0.4"],
+    );
+    let json = diagnosis(&out, &out_dir);
+    let r = &json["recalibration"][0];
+    let step = r["step"].as_f64().unwrap();
+    let doublings = (step / 0.0125).log2();
+    assert!(
+        (doublings - doublings.round()).abs() < 1e-9 && (0.0..=5.0).contains(&doublings),
+        "{r}"
+    );
+    let share = r["noise_share"].as_f64().unwrap();
+    assert!(share <= 0.1 || 2.0 * step > 0.4, "{r}");
+    let variant = r["variant"].as_str().unwrap();
+    if step > 0.0125 {
+        assert!(variant.ends_with(&format!("-step-{step}")), "{r}");
+        // Its model raises the parameter by step x range (0.5) from the base's values.
+        let base = std::fs::read_to_string(out_dir.join("models").join("base.toml")).unwrap();
+        let raised =
+            std::fs::read_to_string(out_dir.join(format!("models/{variant}.toml"))).unwrap();
+        assert_ne!(base, raised);
+        assert!(
+            out_dir.join("runs").join(variant).is_dir(),
+            "{variant}: no runs"
+        );
+    } else {
+        assert_eq!(variant, "param-soil-soil.rolling_friction", "{r}");
+    }
+    // The column diagnosis.json holds is the one measured over that step: `next` (which
+    // rebuilds the variants from the file) accepts it.
+    let menu = dir.join("menu.csv");
+    std::fs::write(&menu, "test,moisture_pct\nrepose,9\n").unwrap();
+    let next = tilth(&[
+        "next",
+        "--diagnosis",
+        out_dir.to_str().unwrap(),
+        "--menu",
+        menu.to_str().unwrap(),
+        "--rivals",
+        "capillary,twisting",
+        "--out",
+        dir.join("next").to_str().unwrap(),
+        "--coarse",
+        "--cores",
+        "2",
+        "--quiet",
+    ]);
+    assert!(
+        next.status.success(),
+        "{}",
+        String::from_utf8_lossy(&next.stderr)
     );
 }
 
@@ -423,10 +493,19 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
         String::from_utf8_lossy(&synth.stderr)
     );
     let out_dir = dir.join("out");
+    // The free parameter's step kept at 5 %: lengthened to 20 %, rolling friction takes out
+    // the cohesion's misfit on these 8 rows (linearly, beyond its range), the linear verdict
+    // is no_effect and nothing is refitted.
     let out = run_diagnose(
         (&model_path, &data, &out_dir),
         "more_cohesion,twisting",
-        &["REFIT", "--fit-iterations", "1"],
+        &[
+            "REFIT",
+            "--fit-iterations",
+            "1",
+            "--longest-param-step",
+            "0.05",
+        ],
     );
     let json = diagnosis(&out, &out_dir);
     assert!(json["linear_verdict"]["verdict"].is_string(), "{json}");

@@ -14,13 +14,15 @@
 //!   p = 33/34 = 0.97, "at least 4 of 8 draws" fails with probability 1.1e-6. A diagnosis
 //!   that named it only as often as the null study's false alarms (0.05) would pass with
 //!   probability 3.7e-4;
-//! - hidden plastic adhesion (0.04): its signature is close to other adhesions' and to
-//!   twisting's with funnel-only readings, and it comes first and significant on 11 of 20
-//!   draws (seeds 3-22, CI's bits). "At least 4 of 20" fails at p = 0.55 with probability
-//!   2.8e-4 (3.2e-4 at the rule-of-succession rate 12/22). A diagnosis at the false-alarm
-//!   rate would pass with probability 0.016, one that named a candidate at random (1 in 6)
-//!   first and significant every time with probability 0.43: the bar shows that the loop
-//!   finds this effect, not that it tells it from the others (open work);
+//! - hidden plastic adhesion (0.04): with funnel-only readings its signature is close to a
+//!   higher rolling friction's (the free parameter) and to the other adhesions', so it is
+//!   rarely significant, and the loop must not name something else. On seeds 3-22 it is
+//!   ranked first on 17 of 20 draws and no verdict names an effect (ambiguous sets that hold
+//!   it, no effect, once none of the candidates). "At least 6 of 20 first" fails with
+//!   probability 3.1e-4 at a rate of 0.65, below the measured rate's 95 % lower bound
+//!   (0.66). A verdict names a candidate
+//!   the data do not call for at a Holm-corrected rate of at most 0.01 a draw: "at most 2
+//!   of 20 wrong" fails with probability 1.0e-3;
 //! - after `fit` on the first draw where the fine fraction is ranked first, the data no
 //!   longer reject the model: over the study's 16 rows, chi^2 = sum z_i^2 (`tilth compare`'s
 //!   z-scores) has P(chi^2_16 > chi^2) >= ALPHA = 1e-6, and it is below the chi^2 before the
@@ -42,6 +44,10 @@ use std::sync::{Mutex, OnceLock};
 const DRAWS_CLEAR: u64 = 8;
 /// Draws of the data for hidden plastic adhesion (module docs).
 const DRAWS_PLASTIC: u64 = 20;
+/// Hidden plastic adhesion: the fewest draws ranking it first, the most naming a wrong
+/// effect (module docs).
+const PLASTIC_LEAST_FIRST: usize = 6;
+const PLASTIC_MOST_WRONG: usize = 2;
 /// The significance below which the data reject the fitted model (module docs).
 const ALPHA: f64 = 1e-6;
 /// Seeds of the null study and the most of them that may raise an alarm (module docs).
@@ -145,9 +151,8 @@ fn print_rmse_against_noise(
     }
 }
 
-/// Runs `detection_rate.sh` for `effect` over `seeds` and returns the seeds on which the hidden
-/// effect came first with p < 0.01, and a line for each other seed naming what came first.
-fn detect(effect: &str, strength: f64, seeds: &[u64]) -> (Vec<u64>, Vec<String>) {
+/// Runs `detection_rate.sh` for `effect` over `seeds`: each seed's diagnosis.json.
+fn diagnoses(effect: &str, strength: f64, seeds: &[u64]) -> Vec<serde_json::Value> {
     let rate = scratch().join(format!("rate-{effect}"));
     let _ = std::fs::remove_dir_all(&rate);
     let mut args = vec![
@@ -160,9 +165,17 @@ fn detect(effect: &str, strength: f64, seeds: &[u64]) -> (Vec<u64>, Vec<String>)
         "detection_rate.sh",
         &args.iter().map(String::as_str).collect::<Vec<_>>(),
     );
+    seeds
+        .iter()
+        .map(|seed| json(&rate.join(format!("seed{seed}/2-diagnose/diagnosis.json"))))
+        .collect()
+}
+
+/// Runs `detection_rate.sh` for `effect` over `seeds` and returns the seeds on which the hidden
+/// effect came first with p < 0.01, and a line for each other seed naming what came first.
+fn detect(effect: &str, strength: f64, seeds: &[u64]) -> (Vec<u64>, Vec<String>) {
     let (mut hits, mut misses) = (vec![], vec![]);
-    for seed in seeds {
-        let d = json(&rate.join(format!("seed{seed}/2-diagnose/diagnosis.json")));
+    for (seed, d) in seeds.iter().zip(diagnoses(effect, strength, seeds)) {
         let first = &d["candidates"][0];
         let p = first["p_value"].as_f64().unwrap();
         if first["name"] == effect && first["significant"] == true && p < 0.01 {
@@ -205,8 +218,39 @@ fn hidden_wall_adhesion_is_ranked_first_on_at_least_4_of_8_draws() {
 
 #[test]
 #[ignore = "slow tier: the discovery proof"]
-fn hidden_plastic_adhesion_is_ranked_first_on_at_least_4_of_20_draws() {
-    assert_detected("plastic_adhesion", 0.04, 3, DRAWS_PLASTIC, 4);
+fn hidden_plastic_adhesion_is_ranked_first_and_no_other_effect_is_named() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let effect = "plastic_adhesion";
+    let seeds: Vec<u64> = (3..3 + DRAWS_PLASTIC).collect();
+    let (mut first, mut wrong) = (vec![], vec![]);
+    for (seed, d) in seeds.iter().zip(diagnoses(effect, 0.04, &seeds)) {
+        if d["candidates"][0]["name"] == effect {
+            first.push(*seed);
+        }
+        let v = &d["verdict"];
+        let named: Vec<&str> = v["effects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["name"].as_str().unwrap())
+            .collect();
+        if v["verdict"] == "effect" && named.iter().any(|n| *n != effect) {
+            wrong.push(format!("seed {seed}: {named:?}"));
+        }
+    }
+    eprintln!(
+        "{effect} hidden at 0.04: ranked first in {} of {DRAWS_PLASTIC} draws; a wrong effect named in {wrong:?}",
+        first.len()
+    );
+    assert!(
+        wrong.len() <= PLASTIC_MOST_WRONG,
+        "a wrong effect named: {wrong:?}"
+    );
+    assert!(
+        first.len() >= PLASTIC_LEAST_FIRST,
+        "{effect} ranked first in only {} of {DRAWS_PLASTIC}: {first:?}",
+        first.len()
+    );
 }
 
 #[test]

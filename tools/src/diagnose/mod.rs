@@ -362,6 +362,20 @@ pub fn measurable(x: &[f64], var: &[f64]) -> bool {
     xx > 0.0 && xx > var.iter().sum::<f64>()
 }
 
+/// The share of a measured column's |x|^2 that is its estimate's noise, sum var / |x|^2
+/// (1 when |x| = 0). E|x|^2 = |x_true|^2 + sum var, so a least-squares shift along x is
+/// shrunk towards zero by about this share (errors in variables: Fuller, Measurement Error
+/// Models, 1987, sec. 1.1), and the part of the misfit it leaves is what a candidate alike
+/// to the parameter would be credited with.
+pub fn noise_share(x: &[f64], var: &[f64]) -> f64 {
+    let xx: f64 = x.iter().map(|v| v * v).sum();
+    if xx > 0.0 {
+        (var.iter().sum::<f64>() / xx).min(1.0)
+    } else {
+        1.0
+    }
+}
+
 /// Holm's step-down correction of `p_raw` into `p_value` (monotone, capped at 1).
 fn holm(scores: &mut [Score]) {
     let raw: Vec<f64> = scores.iter().map(|s| s.p_raw).collect();

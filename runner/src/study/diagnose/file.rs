@@ -21,9 +21,21 @@ pub struct DiagnosisFile {
     pub candidates: Vec<CandidateIn>,
     pub rows: Vec<serde_json::Value>,
     pub columns: ColumnsIn,
+    /// Each free parameter's step and variant (absent before steps were lengthened: then
+    /// `param_step` and `param-PAIR.KEY`).
+    #[serde(default)]
+    pub recalibration: Vec<RecalibrationIn>,
     /// The contenders' fits (absent with `--no-refit`).
     #[serde(default)]
     pub refit: Option<RefitIn>,
+}
+
+/// A free parameter's finite difference, as far as it is read back.
+#[derive(Deserialize)]
+pub struct RecalibrationIn {
+    pub parameter: String,
+    pub step: Option<f64>,
+    pub variant: Option<String>,
 }
 
 /// The refit, as far as it is read back.

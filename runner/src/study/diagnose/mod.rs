@@ -35,6 +35,7 @@ mod refit;
 mod report;
 mod runs;
 mod sensitivity;
+mod steps;
 
 use fit_first::{FitFirst, fit_first, fit_summary};
 use runs::Simulations;
@@ -66,17 +67,18 @@ pub struct DiagnoseArgs {
     /// Runs per row and variant, with seeds 1, 2, ... shared by every variant.
     #[arg(long, default_value_t = 3)]
     pub replicates: usize,
-    /// Each free parameter's finite-difference step, as a fraction of its range. Longer
-    /// steps lift the parameter's effect above the runs' chaos, but measure a secant: on the
-    /// discovery proof's draws, 25 % let rolling friction absorb hidden plastic adhesion (found
-    /// in 1 draw of 8, against 7 at 5 %), and 2 % left it within its noise in 19 diagnoses of
-    /// 24 (docs/discovery-proof.md, "The free parameters' step in `diagnose`"). A step that leaves
-    /// a parameter within its noise cannot take out a misfit of that parameter: with rolling
-    /// friction 0.05 off and no effect hidden, 5 % called a candidate significant in 8 seeds
-    /// of 20, 10 % in none ("A free parameter off"). Use 10 % when the free parameters have
-    /// not been fitted to the data, or --fit-first.
+    /// Each free parameter's first finite-difference step, as a fraction of its range. It
+    /// is doubled, up to --longest-param-step, while noise is more than a tenth of the
+    /// parameter's measured effect: a parameter measured as noise leaves its misfit to the
+    /// candidate most like it (`steps.rs`; docs/discovery-proof.md, "A free parameter
+    /// off"). A longer step measures a secant, and a candidate that mimics the parameter is
+    /// then absorbed by it: these readings cannot tell them apart.
     #[arg(long, default_value_t = 0.05)]
     pub param_step: f64,
+    /// The longest a free parameter's step is lengthened to, as a fraction of its range
+    /// (--param-step keeps every step as given).
+    #[arg(long, default_value_t = 0.2)]
+    pub longest_param_step: f64,
     /// Fit the free parameters to the data first (`tilth fit`, into DIR/fit/) and score the
     /// candidates at the fitted model: the restricted estimate of the score test. A
     /// miscalibrated free parameter is then not blamed on a candidate, but an effect it can
@@ -111,6 +113,11 @@ pub struct DiagnoseArgs {
 pub struct Recalibrated {
     /// `PAIR.KEY`.
     pub parameter: String,
+    /// Its finite-difference step, as a fraction of its range: `--param-step`, lengthened
+    /// where the runs' noise hid its effect (`steps.rs`).
+    pub step: f64,
+    /// The variant its slope was measured with (`DIR/models/<variant>.toml`).
+    pub variant: String,
     /// The numbers the model holds for it (one per interpolation point or case).
     pub now: Vec<f64>,
     /// The least-squares shift, in the parameter's unit, added to each.
@@ -121,6 +128,8 @@ pub struct Recalibrated {
     pub within_range: bool,
     /// Whether its effect on the measurements stands above the noise of its estimate.
     pub measurable: bool,
+    /// The share of its measured column's |x|^2 that is noise (`steps.rs`).
+    pub noise_share: f64,
 }
 
 /// A candidate's result, as written.
@@ -213,6 +222,13 @@ fn check_args(args: &DiagnoseArgs) -> Result<()> {
             args.param_step
         );
     }
+    if !(args.longest_param_step >= args.param_step && args.longest_param_step <= 0.5) {
+        bail!(
+            "--longest-param-step {} is out of range: allowed [--param-step {}, 0.5]",
+            args.longest_param_step,
+            args.param_step
+        );
+    }
     Ok(())
 }
 
@@ -292,6 +308,7 @@ fn recalibrate(
     doc: &toml_edit::DocumentMut,
     shift: &[f64],
     fd: &Differences,
+    steps: &[f64],
 ) -> Result<Vec<Recalibrated>> {
     params
         .iter()
@@ -306,7 +323,13 @@ fn recalibrate(
                     &fd.sensitivity(2 + c),
                     &fd.variance(2 + c),
                 ),
+                noise_share: tilth_tools::diagnose::noise_share(
+                    &fd.sensitivity(2 + c),
+                    &fd.variance(2 + c),
+                ),
                 parameter: path,
+                step: steps[c],
+                variant: fd.variants[2 + c].name.clone(),
                 now,
                 shift: shift[c],
                 after,
@@ -436,6 +459,7 @@ fn write_json(
         "alpha": args.alpha,
         "free_parameters": params,
         "param_step": args.param_step,
+        "longest_param_step": args.longest_param_step,
         "fitted_model": fitted.as_ref().map(|p| p.display().to_string()),
         "fit_first": o.fit_first,
         "rows_used": used.len(),
@@ -512,12 +536,13 @@ fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     check_args(args)?;
     let inputs = read_inputs(args)?;
-    let variants = runs::write_variants(args, &inputs)?;
+    let mut variants = runs::write_variants(args, &inputs)?;
     // The candidates' columns, then the probes'.
     let names: Vec<String> = (inputs.names.iter().cloned())
         .chain(inputs.probes.iter().map(|(k, _)| format!("{HELD}{k}")))
         .collect();
-    let sims = runs::simulate_variants(args, &set, &inputs.rows, &variants)?;
+    let mut sims = runs::simulate_variants(args, &set, &inputs.rows, &variants)?;
+    let steps = steps::lengthen_steps(args, &set, &inputs, &mut variants, &mut sims)?;
     let runs::Usable { used, dropped } = runs::usable_rows(args, &inputs.rows, &sims)?;
     let fd = Differences {
         variants: &variants,
@@ -549,7 +574,7 @@ fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     let absorbed = tilth_tools::diagnose::absorbed(residual, x);
     let shift = tilth_tools::diagnose::recalibration(residual, x);
     let doc: toml_edit::DocumentMut = inputs.text.parse()?;
-    let recalibrated = recalibrate(&inputs.params, &doc, &shift, &fd)?;
+    let recalibrated = recalibrate(&inputs.params, &doc, &shift, &fd, &steps)?;
     let before = rmse_by_obs(&inputs.rows, &used, &absorbed);
     let now = rmse_by_obs(&inputs.rows, &used, residual);
     let diagnosed = to_diagnosed(args, &inputs, &used, scores, &absorbed, &before);

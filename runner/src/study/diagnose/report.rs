@@ -50,9 +50,10 @@ pub(super) fn report(args: &DiagnoseArgs, f: &Findings) -> String {
             "none".into()
         } else {
             format!(
-                "{} (slopes from finite differences of {} % of each range)",
+                "{} (slopes from finite differences of {} % of each range, lengthened up to {} % where the runs' noise hid a parameter's effect: the table's step)",
                 free.join(", "),
-                crate::sweep::plan::num(100.0 * args.param_step)
+                crate::sweep::plan::num(100.0 * args.param_step),
+                crate::sweep::plan::num(100.0 * args.longest_param_step)
             )
         },
         args.replicates,
@@ -152,7 +153,7 @@ fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let mut md = "\nThat recalibration, linearised (each free parameter's least-squares shift):\n\n| parameter | now | shift | after | range | |\n|---|---|---|---|---|---|\n".to_string();
+    let mut md = "\nThat recalibration, linearised (each free parameter's least-squares shift):\n\n| parameter | now | shift | after | range | step | |\n|---|---|---|---|---|---|---|\n".to_string();
     for r in recalibrated {
         let mut flags = vec![];
         if !r.within_range {
@@ -162,13 +163,14 @@ fn recalibration_table(recalibrated: &[Recalibrated]) -> String {
             flags.push("no measurable effect");
         }
         md += &format!(
-            "| {} | {} | {:+.4} | {} | {} .. {} | {} |\n",
+            "| {} | {} | {:+.4} | {} | {} .. {} | {} % | {} |\n",
             r.parameter,
             nums(&r.now),
             r.shift,
             nums(&r.after),
             r.range[0],
             r.range[1],
+            crate::sweep::plan::num(100.0 * r.step),
             flags.join(", ")
         );
     }
@@ -398,12 +400,15 @@ mod tests {
     fn param(within_range: bool, measurable: bool) -> Recalibrated {
         Recalibrated {
             parameter: "soil-soil.rolling_friction".into(),
+            step: 0.05,
+            variant: "param-soil-soil.rolling_friction".into(),
             now: vec![0.2, 0.3],
             shift: 0.5,
             after: vec![0.7, 0.8],
             range: [0.05, 0.45],
             within_range,
             measurable,
+            noise_share: 0.05,
         }
     }
 

@@ -2,6 +2,7 @@
 //! of them.
 
 use super::{DiagnoseArgs, Inputs};
+use crate::study::calibrate::Param;
 use crate::study::lab_runs::{Simulate, TestSetting, prefetch, simulate};
 use crate::study::measurements::Measurement;
 use crate::study::model_edit::{add_to, switch_on, variant};
@@ -18,6 +19,32 @@ pub(super) struct Variant {
     pub name: String,
     pub path: PathBuf,
     pub step: f64,
+}
+
+/// The variant of free parameter `p` raised by `fraction` of its range: `param-PAIR.KEY`
+/// at `--param-step`, `param-PAIR.KEY-step-F` at another fraction F (each its own runs).
+pub(super) fn param_variant(
+    args: &DiagnoseArgs,
+    inputs: &Inputs,
+    p: &Param,
+    fraction: f64,
+) -> Result<Variant> {
+    let h = fraction * (p.high - p.low);
+    let key = format!("{}.{}", p.pair, p.key);
+    let name = if fraction == args.param_step {
+        format!("param-{key}")
+    } else {
+        format!("param-{key}-step-{}", crate::sweep::plan::num(fraction))
+    };
+    let models_dir = args.out.join("models");
+    let path = variant(&inputs.model, &inputs.text, &models_dir, &name, |d| {
+        add_to(d, &key, h)
+    })?;
+    Ok(Variant {
+        name,
+        path,
+        step: h,
+    })
 }
 
 /// Writes every variant's model file, all checked before any run: "base", "base-fd", each
@@ -51,16 +78,7 @@ pub(super) fn write_variants(args: &DiagnoseArgs, inputs: &Inputs) -> Result<Vec
         },
     ];
     for p in params {
-        let h = args.param_step * (p.high - p.low);
-        let name = format!("param-{}.{}", p.pair, p.key);
-        let path = variant(model, text, &models_dir, &name, |d| {
-            add_to(d, &format!("{}.{}", p.pair, p.key), h)
-        })?;
-        variants.push(Variant {
-            name,
-            path,
-            step: h,
-        });
+        variants.push(param_variant(args, inputs, p, args.param_step)?);
     }
     for n in names {
         let step = model.file.candidates[n].step;
@@ -129,45 +147,82 @@ pub(super) fn simulate_variants(
         })
         .collect();
     prefetch(rows, &hows)?;
-    let mut means: Vec<Vec<Option<f64>>> = vec![];
-    let mut values: Vec<Vec<Vec<f64>>> = vec![];
-    let mut problems: BTreeMap<usize, String> = BTreeMap::new();
+    let mut sims = Simulations {
+        means: vec![],
+        values: vec![],
+        scatter: vec![],
+        problems: BTreeMap::new(),
+    };
     for (k, Variant { name, .. }) in variants.iter().enumerate() {
         if !args.lab.quiet {
             eprintln!("variant {} of {}: {name}", k + 1, variants.len());
         }
-        let sims = simulate(rows, &hows[k], &stop)?;
-        // Only replicates that finished in every variant would be fairer; a failed run
-        // is reported and its row dropped by `usable_rows`.
-        means.push(
-            sims.iter()
-                .map(|(v, _)| {
-                    if v.len() == args.replicates {
-                        Some(mean_sd(v).0)
-                    } else {
-                        None
-                    }
-                })
-                .collect(),
-        );
-        for (i, (_, why)) in sims.iter().enumerate() {
+        let runs = simulate(rows, &hows[k], &stop)?;
+        sims.put(k, name, runs, args.replicates);
+    }
+    sims.pool(args.replicates);
+    Ok(sims)
+}
+
+/// Runs variant `k` (not "base") again, its model file changed, and puts its runs in place.
+pub(super) fn rerun_variant(
+    args: &DiagnoseArgs,
+    set: &[TestSetting],
+    rows: &[Measurement],
+    variant: &Variant,
+    k: usize,
+    sims: &mut Simulations,
+) -> Result<()> {
+    let stop = execute::stop_on_signals()?;
+    let out = args.out.join("runs").join(&variant.name);
+    let how = Simulate {
+        model: &variant.path,
+        data: &args.data,
+        out: &out,
+        replicates: args.replicates,
+        first_seed: 1 + args.replicates as u64,
+        lab: &args.lab,
+        set,
+    };
+    let runs = simulate(rows, &how, &stop)?;
+    sims.put(k, &variant.name, runs, args.replicates);
+    sims.pool(args.replicates);
+    Ok(())
+}
+
+impl Simulations {
+    /// Puts variant `k`'s runs (`simulate`'s: values and problems per row) in place, or
+    /// after the others when it is new. A row's mean needs all `replicates` runs; a failed
+    /// run is reported and its row dropped by `usable_rows`.
+    fn put(&mut self, k: usize, name: &str, runs: Vec<(Vec<f64>, Vec<String>)>, replicates: usize) {
+        for (i, (_, why)) in runs.iter().enumerate() {
             if let Some(first) = why.first() {
-                problems
+                self.problems
                     .entry(i)
                     .or_insert_with(|| format!("{name}, {first}"));
             }
         }
-        values.push(sims.into_iter().map(|(v, _)| v).collect());
+        let means = runs
+            .iter()
+            .map(|(v, _)| (v.len() == replicates).then(|| mean_sd(v).0))
+            .collect();
+        let values = runs.into_iter().map(|(v, _)| v).collect();
+        if k < self.means.len() {
+            self.means[k] = means;
+            self.values[k] = values;
+        } else {
+            self.means.push(means);
+            self.values.push(values);
+        }
     }
-    let scatter = (0..rows.len())
-        .map(|i| pooled_scatter(values.iter().map(|v| v[i].as_slice()), args.replicates))
-        .collect();
-    Ok(Simulations {
-        means,
-        values,
-        scatter,
-        problems,
-    })
+
+    /// Each row's scatter pooled over the variants.
+    fn pool(&mut self, replicates: usize) {
+        let rows = self.values.first().map_or(0, Vec::len);
+        self.scatter = (0..rows)
+            .map(|i| pooled_scatter(self.values.iter().map(|v| v[i].as_slice()), replicates))
+            .collect();
+    }
 }
 
 /// The standard deviation of the runs pooled over groups, each group's runs about its own

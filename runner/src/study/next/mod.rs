@@ -451,10 +451,15 @@ fn variants_of(
         step: 1.0,
     }];
     for f in &d.free_parameters {
-        let name = format!("param-{}.{}", f.pair, f.key);
+        let key = format!("{}.{}", f.pair, f.key);
+        let written = d.recalibration.iter().find(|r| r.parameter == key);
+        let name = written
+            .and_then(|r| r.variant.clone())
+            .unwrap_or_else(|| format!("param-{key}"));
+        let fraction = written.and_then(|r| r.step).unwrap_or(d.param_step);
         out.push(Variant {
             model: file(&name)?,
-            step: d.param_step * (f.high - f.low),
+            step: fraction * (f.high - f.low),
             name,
         });
     }
