@@ -183,7 +183,7 @@ fn report(
     md += "\n";
     let (scores, p_value) = misfit(rows, best, dof);
     md += &format!(
-        "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}); the misfit test, which allows for standard errors estimated from {} runs (the normal scores' sum of squares, {scores:.2}): p = {}. {}\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
+        "\nchi^2 {:.2} on {dof} degrees of freedom (start {:.2}); the misfit test, which allows for standard errors estimated from {} runs (the normal scores' sum of squares, {scores:.2}): p {}. {}\n\n| observable | RMSE at the start | RMSE fitted |\n|---|---|---|\n",
         best.chi2,
         first.chi2,
         args.replicates,
