@@ -54,6 +54,11 @@ pub struct ModelFile {
     /// Effects the model lacks, for `tilth diagnose`; the lab ignores them.
     #[serde(default)]
     pub candidates: BTreeMap<String, CandidateModel>,
+    /// `[probes]`: parameters the model holds fixed but is unsure of, `"PAIR.KEY" = STEP`,
+    /// which `tilth diagnose` weighs against the candidates (the model with each raised by
+    /// STEP); the lab ignores them.
+    #[serde(default)]
+    pub probes: BTreeMap<String, f64>,
     /// The soil's size mix beyond the test's one diameter ([`super::sizes::SizeMix`]).
     pub particles: Option<ParticlesModel>,
 }

@@ -57,11 +57,15 @@ fn run_diagnose(
         "--quiet",
     ];
     args.extend_from_slice(extra);
+    // The model file's probes have their own test: the others weigh only what they name.
+    if !extra.contains(&"PROBES") {
+        args.push("--no-model-probes");
+    }
     // The refit has its own test: the others check the linear diagnosis.
     if !extra.contains(&"REFIT") {
         args.push("--no-refit");
     }
-    args.retain(|a| *a != "REFIT");
+    args.retain(|a| *a != "REFIT" && *a != "PROBES");
     tilth(&args)
 }
 
@@ -194,6 +198,87 @@ fn param_step_sets_the_free_parameters_finite_difference() {
     assert!(
         md.contains("soil-soil.rolling_friction (slopes from finite differences of 20 % of each range, lengthened up to 20 %"),
         "{md}"
+    );
+}
+
+/// The model file's `[probes]` are weighed beside the candidates as held parameters: a
+/// `--probe` of the same key replaces its step, a free parameter is not probed, and a probe
+/// of a pair the model lacks, or with a zero step, is refused before anything is written.
+#[test]
+fn the_model_files_probes_are_weighed_unless_freed_or_replaced() {
+    let (dir, model_path, data) = absorbed_case("diagnose-model-probes", "0.1");
+    let out_dir = dir.join("out");
+    let text = std::fs::read_to_string(&model_path).unwrap();
+    let with_probe = |line: &str| text.replace("[probes]\n", &format!("[probes]\n{line}\n"));
+    for (line, expected) in [
+        (
+            "\"soil-rock.friction\" = 0.1",
+            "probes.\"soil-rock.friction\": `soil-rock` is not a pair of the model; its pairs are soil-soil, soil-steel",
+        ),
+        (
+            "\"soil-steel.friction\" = 0.0",
+            "probes.\"soil-steel.friction\" = 0 is out of range: allowed a non-zero number",
+        ),
+    ] {
+        std::fs::write(&model_path, with_probe(line)).unwrap();
+        let out = run_diagnose((&model_path, &data, &out_dir), "more_rolling", &["PROBES"]);
+        assert!(!out.status.success(), "{line} was accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(&format!("{}: {expected}", model_path.display())),
+            "{err}"
+        );
+        assert!(!out_dir.exists(), "{line}: wrote {}", out_dir.display());
+    }
+    std::fs::write(
+        &model_path,
+        with_probe("\"soil-soil.rolling_friction\" = 0.05"),
+    )
+    .unwrap();
+    let out = run_diagnose(
+        (&model_path, &data, &out_dir),
+        "more_rolling",
+        &["PROBES", "--probe", "soil-soil.friction=0.2"],
+    );
+    let json = diagnosis(&out, &out_dir);
+    let probes: Vec<(String, f64)> = json["probes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            (
+                p["parameter"].as_str().unwrap().to_string(),
+                p["step"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    let expected = [
+        ("soil-soil.friction", 0.2),
+        ("soil-soil.restitution", 0.05),
+        ("soil-soil.surface_energy", 0.05),
+    ];
+    assert_eq!(probes.len(), expected.len(), "{probes:?}");
+    for ((key, step), (want_key, want_step)) in probes.iter().zip(expected) {
+        assert_eq!((key.as_str(), *step), (want_key, want_step), "{probes:?}");
+        assert!(
+            out_dir
+                .join("models")
+                .join(format!("probe-{key}.toml"))
+                .is_file(),
+            "{key}"
+        );
+    }
+    let held: Vec<&str> = json["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["held_parameter"] == true)
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(held.len(), 3, "{json}");
+    assert!(
+        held.iter().all(|n| n.starts_with("held:soil-soil.")),
+        "{held:?}"
     );
 }
 

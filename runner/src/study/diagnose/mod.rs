@@ -29,6 +29,7 @@ use std::path::PathBuf;
 use tilth_tools::diagnose::verdict::Verdict;
 use tilth_tools::diagnose::{Score, score_tests};
 
+mod asked;
 pub mod file;
 mod fit_first;
 mod refit;
@@ -61,9 +62,14 @@ pub struct DiagnoseArgs {
     /// A model parameter the diagnosis holds fixed, weighed against the candidates,
     /// PAIR.KEY=STEP (repeatable): its sensitivity (the model with it raised by STEP) takes
     /// part in the verdict as a candidate would, so a misfit that a miscalibrated parameter
-    /// explains is not blamed on an effect (e.g. soil-soil.surface_energy=0.05).
+    /// explains is not blamed on an effect (e.g. soil-soil.surface_energy=0.05). Added to
+    /// the model file's `[probes]` (the same PAIR.KEY: this STEP); a free --param is not
+    /// probed.
     #[arg(long = "probe")]
     pub probes: Vec<String>,
+    /// Leave out the model file's `[probes]` (only --probe's are weighed).
+    #[arg(long)]
+    pub no_model_probes: bool,
     /// Runs per row and variant, with seeds 1, 2, ... shared by every variant.
     #[arg(long, default_value_t = 3)]
     pub replicates: usize,
@@ -149,59 +155,6 @@ pub struct Diagnosed {
 /// The name a `--probe PAIR.KEY` goes by among the candidates.
 pub const HELD: &str = "held:";
 
-/// `PAIR.KEY=STEP` of `--probe`.
-fn parse_probe(s: &str) -> Result<(String, f64)> {
-    let (path, step) = s.split_once('=').unwrap_or((s, ""));
-    let step: f64 = step.trim().parse().map_err(|_| {
-        anyhow::anyhow!("--probe {s:?}: expected PAIR.KEY=STEP, e.g. soil-soil.surface_energy=0.05")
-    })?;
-    if !(step.is_finite() && step != 0.0 && path.contains('.')) {
-        bail!(
-            "--probe {s:?}: STEP {step} is out of range: allowed a non-zero number, with PAIR.KEY before it"
-        );
-    }
-    Ok((path.trim().to_string(), step))
-}
-
-/// Every candidate asked for exists in the model file with a usable step and strength.
-fn check_candidates(names: &[String], model: &Model, path: &std::path::Path) -> Result<()> {
-    if names.is_empty() {
-        bail!(
-            "{}: no [candidates.NAME] sections: nothing to diagnose (see docs/discovery.md)",
-            path.display()
-        );
-    }
-    for n in names {
-        let Some(c) = model.file.candidates.get(n) else {
-            bail!(
-                "--candidates: `{n}` is not in {}; it has {}",
-                path.display(),
-                model
-                    .file
-                    .candidates
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        };
-        if !(c.step.is_finite() && c.step != 0.0) {
-            bail!(
-                "{}: candidates.{n}.step = {} is out of range: allowed a non-zero number",
-                path.display(),
-                c.step
-            );
-        }
-        if c.strength.is_empty() {
-            bail!(
-                "{}: candidates.{n}.strength is empty: name at least one PAIR.KEY",
-                path.display()
-            );
-        }
-    }
-    Ok(())
-}
-
 /// The options' ranges, checked before anything is read.
 fn check_args(args: &DiagnoseArgs) -> Result<()> {
     if args.replicates < 2 {
@@ -273,12 +226,8 @@ fn read_inputs(args: &DiagnoseArgs) -> Result<Inputs> {
     } else {
         args.candidates.clone()
     };
-    check_candidates(&names, &model, &args.model)?;
-    let probes: Vec<(String, f64)> = args
-        .probes
-        .iter()
-        .map(|p| parse_probe(p))
-        .collect::<Result<_>>()?;
+    asked::check_candidates(&names, &model, &args.model)?;
+    let probes = asked::probes(args, &model, &params)?;
     // With --fit-first, the restricted estimate: the candidates are scored where the model
     // without them fits the data best.
     let (model, text, fitted) = match fit_first(args, &rows)? {

@@ -221,6 +221,21 @@ fn called(name: &str) -> String {
     }
 }
 
+/// The held parameters among `names`, in a sentence: they could absorb the misfit.
+fn could_absorb(names: &[String]) -> String {
+    let held: Vec<&str> = names.iter().filter_map(|n| n.strip_prefix(HELD)).collect();
+    match held.as_slice() {
+        [] => String::new(),
+        [one] => format!(
+            " The held parameter {one} could absorb the misfit: it may be miscalibrated, and no effect missing. Free it with --param and diagnose again."
+        ),
+        [rest @ .., last] => format!(
+            " The held parameters {} and {last} could absorb the misfit: they may be miscalibrated, and no effect missing. Free them with --param and diagnose again.",
+            rest.join(", ")
+        ),
+    }
+}
+
 /// The verdict in words: what the data call for, and what to do next.
 /// After a refitted `no_effect`: the effects that fit within the noise too, with their
 /// fitted strengths, and how to tell one from the free parameters.
@@ -319,12 +334,6 @@ pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
             t
         }
         Kind::Ambiguous => {
-            let held: Vec<String> = v
-                .ambiguous
-                .iter()
-                .filter(|n| n.starts_with(HELD))
-                .map(|n| called(n))
-                .collect();
             let mut t = format!(
                 "**Verdict: ambiguous.** These data cannot tell {} apart: each explains what the first explains (the tests of each given another are below). Naming one of them would be a guess. Run `tilth next --diagnosis {}`: it ranks the measurements that would separate them and writes their conditions.",
                 v.ambiguous
@@ -337,17 +346,12 @@ pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
             if !effects.is_empty() {
                 t += &format!(" Needed before them: {}.", effects.join(", "));
             }
-            if !held.is_empty() {
-                t += &format!(
-                    " {} could absorb the misfit: it may be a miscalibration, not a missing effect.",
-                    held.join(", ")
-                );
-            }
+            t += &could_absorb(&v.ambiguous);
             t
         }
         Kind::NoneOfTheCandidates => {
             let mut t = format!(
-                "**Verdict: none of the candidates.** After the free parameters{}, what is left is more than the noise ({misfit}), and no candidate's signature explains it. The missing effect is none of these: see docs/adding-an-effect.md, or a parameter held fixed is off (weigh one with --probe PAIR.KEY=STEP).",
+                "**Verdict: none of the candidates.** After the free parameters{}, what is left is more than the noise ({misfit}), and no candidate's signature explains it. The missing effect is none of these: see docs/adding-an-effect.md, or a parameter held fixed is off (list it in the model's [probes], or weigh it with --probe PAIR.KEY=STEP).",
                 if v.effects.is_empty() && v.ambiguous.is_empty() {
                     String::new()
                 } else {
@@ -370,6 +374,7 @@ pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
                         .collect::<Vec<_>>()
                         .join(", ")
                 );
+                t += &could_absorb(&v.ambiguous);
             }
             t
         }
@@ -396,6 +401,27 @@ pub(super) fn verdict_words(v: &Verdict, out: &std::path::Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_held_parameters_among_the_rivals_are_named_as_what_could_absorb_the_misfit() {
+        let names = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert_eq!(could_absorb(&names(&["fines", "capillary"])), "");
+        let one = could_absorb(&names(&["fines", "held:soil-soil.friction"]));
+        assert!(
+            one.starts_with(" The held parameter soil-soil.friction could absorb"),
+            "{one}"
+        );
+        let three = could_absorb(&names(&[
+            "held:soil-soil.friction",
+            "fines",
+            "held:soil-soil.restitution",
+            "held:soil-soil.surface_energy",
+        ]));
+        assert!(
+            three.starts_with(" The held parameters soil-soil.friction, soil-soil.restitution and soil-soil.surface_energy could absorb"),
+            "{three}"
+        );
+    }
 
     fn param(within_range: bool, measurable: bool) -> Recalibrated {
         Recalibrated {
