@@ -235,37 +235,45 @@ fn the_model_files_probes_are_weighed_unless_freed_or_replaced() {
         with_probe("\"soil-soil.rolling_friction\" = 0.05"),
     )
     .unwrap();
+    // Every step kept as given (--longest-param-step = --param-step), then lengthened.
     let out = run_diagnose(
         (&model_path, &data, &out_dir),
         "more_rolling",
-        &["PROBES", "--probe", "soil-soil.friction=0.2"],
+        &[
+            "PROBES",
+            "--probe",
+            "soil-soil.friction=0.2",
+            "--longest-param-step",
+            "0.05",
+        ],
     );
     let json = diagnosis(&out, &out_dir);
-    let probes: Vec<(String, f64)> = json["probes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| {
+    let probes = |json: &serde_json::Value| -> Vec<(String, f64, String)> {
+        let all = json["probes"].as_array().unwrap().iter();
+        all.map(|p| {
             (
                 p["parameter"].as_str().unwrap().to_string(),
                 p["step"].as_f64().unwrap(),
+                p["variant"].as_str().unwrap().to_string(),
             )
         })
-        .collect();
+        .collect()
+    };
     let expected = [
         ("soil-soil.friction", 0.2),
-        ("soil-soil.restitution", 0.05),
-        ("soil-soil.surface_energy", 0.05),
+        ("soil-soil.restitution", 0.08),
+        ("soil-soil.surface_energy", 0.1),
     ];
-    assert_eq!(probes.len(), expected.len(), "{probes:?}");
-    for ((key, step), (want_key, want_step)) in probes.iter().zip(expected) {
-        assert_eq!((key.as_str(), *step), (want_key, want_step), "{probes:?}");
+    let kept = probes(&json);
+    assert_eq!(kept.len(), expected.len(), "{kept:?}");
+    for ((key, step, variant), (want_key, want_step)) in kept.iter().zip(expected) {
+        assert_eq!((key.as_str(), *step), (want_key, want_step), "{kept:?}");
+        assert_eq!(*variant, format!("probe-{key}"));
         assert!(
             out_dir
                 .join("models")
-                .join(format!("probe-{key}.toml"))
-                .is_file(),
-            "{key}"
+                .join(format!("{variant}.toml"))
+                .is_file()
         );
     }
     let held: Vec<&str> = json["candidates"]
@@ -280,6 +288,34 @@ fn the_model_files_probes_are_weighed_unless_freed_or_replaced() {
         held.iter().all(|n| n.starts_with("held:soil-soil.")),
         "{held:?}"
     );
+    // Lengthened as a free parameter's step is (by at most --longest-param-step over
+    // --param-step, 4x): each probe's variant raises it by the step it reports. The
+    // restitution is a plain number in the model (0.45), so its variant's value says so.
+    let long_dir = dir.join("lengthened");
+    let out = run_diagnose((&model_path, &data, &long_dir), "more_rolling", &["PROBES"]);
+    let long = probes(&diagnosis(&out, &long_dir));
+    // Without --probe, friction's step is the file's.
+    for ((key, step, variant), given) in long.iter().zip([0.08, 0.08, 0.1]) {
+        let factor = step / given;
+        assert!(
+            [1.0, 2.0, 4.0].iter().any(|f| (factor - f).abs() < 1e-9),
+            "{key}: step {step} from {given}"
+        );
+        let model: toml::Table = toml::from_str(
+            &std::fs::read_to_string(long_dir.join("models").join(format!("{variant}.toml")))
+                .unwrap(),
+        )
+        .unwrap();
+        if key == "soil-soil.restitution" {
+            let raised = model["pairs"]["soil-soil"]["restitution"]
+                .as_float()
+                .unwrap();
+            assert!(
+                (raised - (0.45 + step)).abs() < 1e-12,
+                "{variant}: {raised}"
+            );
+        }
+    }
 }
 
 /// A free parameter whose slope over its first step is mostly the runs' noise is measured

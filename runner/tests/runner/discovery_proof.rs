@@ -18,7 +18,8 @@
 //!   higher rolling friction's (the free parameter) and to the other adhesions', so it is
 //!   rarely significant, and the loop must not name something else. On seeds 3-22 it is
 //!   ranked first on 17 of 20 draws and no verdict names an effect (ambiguous sets that hold
-//!   it, no effect, once none of the candidates). "At least 6 of 20 first" fails with
+//!   it, no effect, none of the candidates; the same with the model's probes beside the
+//!   candidates). "At least 6 of 20 first" fails with
 //!   probability 3.1e-4 at a rate of 0.65, below the measured rate's 95 % lower bound
 //!   (0.66). A verdict names a candidate
 //!   the data do not call for at a Holm-corrected rate of at most 0.01 a draw: "at most 2

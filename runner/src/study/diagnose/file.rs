@@ -60,11 +60,13 @@ pub struct ContenderIn {
     pub dir: PathBuf,
 }
 
-/// A `--probe PAIR.KEY=STEP` of the diagnosis.
+/// A held parameter the diagnosis probed, with its step as measured (lengthened or not).
 #[derive(Deserialize)]
 pub struct Probe {
     pub parameter: String,
     pub step: f64,
+    /// Its model's variant (`probe-KEY`, or `probe-KEY-step-STEP` once lengthened).
+    pub variant: Option<String>,
 }
 
 /// A candidate's score, as far as it is read back.

@@ -379,6 +379,8 @@ struct Outcome {
     linear_verdict: Option<Verdict>,
     refits: Option<refit::Refits>,
     dropped: Vec<String>,
+    /// Each probe's variant, as its step was measured.
+    probe_variants: Vec<String>,
 }
 
 /// Writes `DIR/diagnosis.json`: the settings, the outcome, and the standardised columns and
@@ -417,7 +419,7 @@ fn write_json(
         "rmse_after_recalibration": o.before,
         "recalibration": o.recalibrated,
         "candidates": o.diagnosed,
-        "probes": probes.iter().map(|(k, h)| serde_json::json!({"parameter": k, "step": h})).collect::<Vec<_>>(),
+        "probes": probes.iter().zip(&o.probe_variants).map(|((k, h), v)| serde_json::json!({"parameter": k, "step": h, "variant": v})).collect::<Vec<_>>(),
         "verdict": o.verdict,
         "linear_verdict": o.linear_verdict,
         "refit": o.refits,
@@ -484,7 +486,7 @@ pub fn diagnose(args: &DiagnoseArgs) -> Result<String> {
 fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
     let set = args.lab.set.parse()?;
     check_args(args)?;
-    let inputs = read_inputs(args)?;
+    let mut inputs = read_inputs(args)?;
     let mut variants = runs::write_variants(args, &inputs)?;
     // The candidates' columns, then the probes'.
     let names: Vec<String> = (inputs.names.iter().cloned())
@@ -492,6 +494,10 @@ fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         .collect();
     let mut sims = runs::simulate_variants(args, &set, &inputs.rows, &variants)?;
     let steps = steps::lengthen_steps(args, &set, &inputs, &mut variants, &mut sims)?;
+    let first_probe = variants.len() - inputs.probes.len();
+    for (probe, v) in inputs.probes.iter_mut().zip(&variants[first_probe..]) {
+        probe.1 = v.step;
+    }
     let runs::Usable { used, dropped } = runs::usable_rows(args, &inputs.rows, &sims)?;
     let fd = Differences {
         variants: &variants,
@@ -542,6 +548,10 @@ fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         linear_verdict,
         refits,
         dropped,
+        probe_variants: variants[first_probe..]
+            .iter()
+            .map(|v| v.name.clone())
+            .collect(),
     };
     write_json(args, &inputs, &used, &sims, &lin, &outcome)?;
     write_report(args, &inputs.params, &outcome, out)

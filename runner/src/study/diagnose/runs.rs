@@ -89,15 +89,30 @@ pub(super) fn write_variants(args: &DiagnoseArgs, inputs: &Inputs) -> Result<Vec
         variants.push(Variant { name, path, step });
     }
     for (key, step) in probes {
-        let name = format!("probe-{key}");
-        let path = variant(model, text, &models_dir, &name, |d| add_to(d, key, *step))?;
-        variants.push(Variant {
-            name,
-            path,
-            step: *step,
-        });
+        variants.push(probe_variant(args, inputs, key, *step, false)?);
     }
     Ok(variants)
+}
+
+/// The model with held parameter `key` raised by `step`: `probe-KEY`, or once its step was
+/// lengthened (`steps.rs`) `probe-KEY-step-STEP`.
+pub(super) fn probe_variant(
+    args: &DiagnoseArgs,
+    inputs: &Inputs,
+    key: &str,
+    step: f64,
+    lengthened: bool,
+) -> Result<Variant> {
+    let name = if lengthened {
+        format!("probe-{key}-step-{}", crate::sweep::plan::num(step))
+    } else {
+        format!("probe-{key}")
+    };
+    let models_dir = args.out.join("models");
+    let path = variant(&inputs.model, &inputs.text, &models_dir, &name, |d| {
+        add_to(d, key, step)
+    })?;
+    Ok(Variant { name, path, step })
 }
 
 /// What the runs of every variant gave, indexed by variant and then by row.

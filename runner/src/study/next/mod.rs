@@ -466,11 +466,13 @@ fn variants_of(
     for n in rivals {
         let (name, step) = match n.strip_prefix(super::diagnose::HELD) {
             Some(key) => {
-                let probe = d.probes.iter().find(|p| p.parameter == key);
-                let step = probe
-                    .map(|p| p.step)
+                let probe = d
+                    .probes
+                    .iter()
+                    .find(|p| p.parameter == key)
                     .with_context(|| format!("--rivals: {n} is not a probe of the diagnosis"))?;
-                (format!("probe-{key}"), step)
+                let name = (probe.variant.clone()).unwrap_or_else(|| format!("probe-{key}"));
+                (name, probe.step)
             }
             None => {
                 let c = model.file.candidates.get(n).with_context(|| {
