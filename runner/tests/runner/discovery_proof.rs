@@ -17,9 +17,10 @@
 //! - hidden plastic adhesion (0.04): with funnel-only readings its signature is close to a
 //!   higher rolling friction's (the free parameter) and to the other adhesions', so it is
 //!   rarely significant, and the loop must not name something else. On seeds 3-22 it is
-//!   ranked first on 17 of 20 draws and no verdict names an effect (ambiguous sets that hold
-//!   it, no effect, none of the candidates; the same with the model's probes beside the
-//!   candidates). "At least 6 of 20 first" fails with
+//!   ranked first among the effects on 17 of 20 draws (with and without the model's probes;
+//!   a held surface energy or restitution, which it resembles on the funnel, ranks above it
+//!   on 10 of them) and no verdict names an effect (ambiguous sets that hold it, no effect,
+//!   none of the candidates). "At least 6 of 20 first among the effects" fails with
 //!   probability 3.1e-4 at a rate of 0.65, below the measured rate's 95 % lower bound
 //!   (0.66). A verdict names a candidate
 //!   the data do not call for at a Holm-corrected rate of at most 0.01 a draw: "at most 2
@@ -45,8 +46,8 @@ use std::sync::{Mutex, OnceLock};
 const DRAWS_CLEAR: u64 = 8;
 /// Draws of the data for hidden plastic adhesion (module docs).
 const DRAWS_PLASTIC: u64 = 20;
-/// Hidden plastic adhesion: the fewest draws ranking it first, the most naming a wrong
-/// effect (module docs).
+/// Hidden plastic adhesion: the fewest draws ranking it first among the effects, the most
+/// naming a wrong effect (module docs).
 const PLASTIC_LEAST_FIRST: usize = 6;
 const PLASTIC_MOST_WRONG: usize = 2;
 /// The significance below which the data reject the fitted model (module docs).
@@ -225,7 +226,13 @@ fn hidden_plastic_adhesion_is_ranked_first_and_no_other_effect_is_named() {
     let seeds: Vec<u64> = (3..3 + DRAWS_PLASTIC).collect();
     let (mut first, mut wrong) = (vec![], vec![]);
     for (seed, d) in seeds.iter().zip(diagnoses(effect, 0.04, &seeds)) {
-        if d["candidates"][0]["name"] == effect {
+        // First among the effects: a held parameter (a probe) may rank above it.
+        let first_effect = d["candidates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["held_parameter"] != true);
+        if first_effect.is_some_and(|c| c["name"] == effect) {
             first.push(*seed);
         }
         let v = &d["verdict"];
@@ -240,7 +247,7 @@ fn hidden_plastic_adhesion_is_ranked_first_and_no_other_effect_is_named() {
         }
     }
     eprintln!(
-        "{effect} hidden at 0.04: ranked first in {} of {DRAWS_PLASTIC} draws; a wrong effect named in {wrong:?}",
+        "{effect} hidden at 0.04: ranked first among the effects in {} of {DRAWS_PLASTIC} draws; a wrong effect named in {wrong:?}",
         first.len()
     );
     assert!(
