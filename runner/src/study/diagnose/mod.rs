@@ -494,8 +494,9 @@ fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         .collect();
     let mut sims = runs::simulate_variants(args, &set, &inputs.rows, &variants)?;
     let steps = steps::lengthen_steps(args, &set, &inputs, &mut variants, &mut sims)?;
-    let first_probe = variants.len() - inputs.probes.len();
-    for (probe, v) in inputs.probes.iter_mut().zip(&variants[first_probe..]) {
+    // The probes' variants come last; their steps as lengthened.
+    let probe_variants = &variants[variants.len() - inputs.probes.len()..];
+    for (probe, v) in inputs.probes.iter_mut().zip(probe_variants) {
         probe.1 = v.step;
     }
     let runs::Usable { used, dropped } = runs::usable_rows(args, &inputs.rows, &sims)?;
@@ -548,10 +549,7 @@ fn diagnose_into(args: &DiagnoseArgs, out: &mut dyn Write) -> Result<()> {
         linear_verdict,
         refits,
         dropped,
-        probe_variants: variants[first_probe..]
-            .iter()
-            .map(|v| v.name.clone())
-            .collect(),
+        probe_variants: probe_variants.iter().map(|v| v.name.clone()).collect(),
     };
     write_json(args, &inputs, &used, &sims, &lin, &outcome)?;
     write_report(args, &inputs.params, &outcome, out)

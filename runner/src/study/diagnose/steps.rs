@@ -1,5 +1,5 @@
-//! The free and held parameters' finite-difference steps, lengthened where the runs' chaos hides a
-//! parameter's effect.
+//! The free and held parameters' finite-difference steps, lengthened where the runs' chaos
+//! hides a parameter's effect.
 //!
 //! A free parameter measured over a step too short for the runs' scatter has a slope that is
 //! mostly noise. Least squares then shrinks its shift towards zero (errors in variables), the
