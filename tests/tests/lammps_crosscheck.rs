@@ -235,3 +235,63 @@ fn jkr_pull_off_matches_lammps() {
         "tilth minimum {f_min} vs LAMMPS {lammps}"
     );
 }
+
+/// `jkr_pulloff` is LAMMPS's `jkr` along LAMMPS's own pull (`pp_jkr_pulloff`, undamped, the
+/// pair pulled apart at 2e-4 m/s from 4 um of overlap): the same force at every printed
+/// overlap, and the neck broken at the same rows, at the force minimum. `jkr` (EDEM's) keeps
+/// pulling there, down to delta_c.
+#[test]
+fn jkr_pulloff_breaks_where_lammps_does() {
+    let path = table("pp_jkr_pulloff.csv");
+    let (overlaps, lammps) = (&path["overlap"], &path["fn"]);
+    let pull_off = 3.0 * std::f64::consts::PI * 0.356 * (R / 2.0);
+    let law = |normal: &str| {
+        let m = model(
+            &spec(normal, None, None, None),
+            &[("surface_energy", 0.356)],
+        );
+        let mut h = vec![0.0; m.history_stride()];
+        overlaps
+            .iter()
+            .map(|&d| {
+                let c = contact_at(d, DVec3::ZERO, 1e-8);
+                m.evaluate(0, 0, &c, &mut h).map_or(0.0, |o| -o.force.x)
+            })
+            .collect::<Vec<f64>>()
+    };
+    let ours = law("jkr_pulloff");
+    let mut broken = 0;
+    for ((d, f), l) in overlaps.iter().zip(&ours).zip(lammps) {
+        // LAMMPS prints 12 significant digits; its contact radius solver's tolerance is
+        // about 1e-9 of the pull-off force.
+        assert!(
+            (f - l).abs() < 1e-6 * pull_off,
+            "overlap {d}: jkr_pulloff {f} vs LAMMPS {l}"
+        );
+        assert_eq!(
+            *f == 0.0,
+            *l == 0.0,
+            "overlap {d}: in contact in one code only"
+        );
+        broken += usize::from(*l == 0.0 && *d < 0.0);
+    }
+    assert!(
+        broken > 10,
+        "LAMMPS's pull ends past the break ({broken} free rows)"
+    );
+    let edem = law("jkr");
+    let past = overlaps
+        .iter()
+        .zip(&edem)
+        .filter(|(d, f)| **d < 0.0 && **f != 0.0)
+        .count();
+    let past_lammps = overlaps
+        .iter()
+        .zip(lammps)
+        .filter(|(d, l)| **d < 0.0 && **l != 0.0)
+        .count();
+    assert!(
+        past > past_lammps,
+        "jkr pulls on {past} rows in tension, LAMMPS on {past_lammps}"
+    );
+}

@@ -80,6 +80,13 @@ impl Jkr {
         a * a / r_eff - self.c * a.sqrt()
     }
 
+    /// The overlap of the force minimum F_min = -3 pi gamma R* (m, <= 0) for contact radius
+    /// R*: delta(a_m), a_m = [9 pi gamma R*^2 / (4 E*)]^(1/3), where `jkr_pulloff` breaks.
+    pub fn pulloff_overlap(&self, r_eff: f64) -> f64 {
+        let a_m = (9.0 * PI * self.gamma * r_eff * r_eff / (4.0 * self.e_eff)).cbrt();
+        self.overlap_at_radius(a_m, r_eff)
+    }
+
     /// The breaking overlap delta_c (m, <= 0) for contact radius R*.
     pub fn critical_overlap(&self, r_eff: f64) -> f64 {
         let a_c = (9.0 * PI * self.gamma * r_eff * r_eff / (2.0 * self.e_eff) * (0.75 - 0.5f64.sqrt())).cbrt();
@@ -128,13 +135,29 @@ impl Jkr {
 impl NormalLaw for Jkr {
     #[inline]
     fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce {
+        self.force_breaking_at(c, history, self.critical_overlap(c.r_eff))
+    }
+
+    fn reach(&self, r_eff: f64) -> f64 {
+        -self.critical_overlap(r_eff)
+    }
+
+    #[inline(always)]
+    fn force_lanes(&self, c: &ContactLanes, history: &mut [F]) -> NormalForceLanes {
+        self.force_lanes_with(c, history, |c, h| self.force(c, h))
+    }
+}
+
+impl Jkr {
+    /// The force of a contact whose neck breaks at `break_overlap` (m, <= 0): `jkr` passes
+    /// delta_c, `jkr_pulloff` the overlap of the force minimum.
+    #[inline]
+    pub fn force_breaking_at(&self, c: &Contact, history: &mut [f64], break_overlap: f64) -> NormalForce {
         // In tension the JKR neck exists only if it never broke: it forms on touching
-        // (history set) and breaks for good at delta_c (history cleared). Another law with a
-        // longer reach (a liquid bridge) can keep the pair in contact beyond delta_c, where
-        // the stable branch no longer exists.
-        if c.overlap <= 0.0
-            && (self.gamma == 0.0 || history[0] == 0.0 || c.overlap <= self.critical_overlap(c.r_eff))
-        {
+        // (history set) and breaks for good at `break_overlap` (history cleared). Another
+        // law with a longer reach (a liquid bridge) can keep the pair in contact beyond it,
+        // where the stable branch may no longer exist.
+        if c.overlap <= 0.0 && (self.gamma == 0.0 || history[0] == 0.0 || c.overlap <= break_overlap) {
             history[0] = 0.0;
             return NormalForce::default();
         }
@@ -151,19 +174,21 @@ impl NormalLaw for Jkr {
         }
     }
 
-    fn reach(&self, r_eff: f64) -> f64 {
-        -self.critical_overlap(r_eff)
-    }
-
-    /// Lanes with a negative overlap (a neck in tension, or none) go through `force` lane by
-    /// lane; the pair phase gives touching contacts only.
+    /// The lanes' forces: lanes with a negative overlap (a neck in tension, or none) go
+    /// through `one` (the law's own `force`) lane by lane; the pair phase gives touching
+    /// contacts only, whose force does not depend on where the neck breaks.
     #[inline(always)]
-    fn force_lanes(&self, c: &ContactLanes, history: &mut [F]) -> NormalForceLanes {
+    pub fn force_lanes_with(
+        &self,
+        c: &ContactLanes,
+        history: &mut [F],
+        one: impl Fn(&Contact, &mut [f64]) -> NormalForce,
+    ) -> NormalForceLanes {
         let live = M(std::array::from_fn(|k| k < c.count));
         if (c.overlap.le(F::ZERO) & live).any() {
             let mut out = NormalForceLanes::ZERO;
             for k in 0..c.count {
-                out.set_lane(k, with_lane_history(history, k, |h| self.force(&c.lane(k), h)));
+                out.set_lane(k, with_lane_history(history, k, |h| one(&c.lane(k), h)));
             }
             return out;
         }
@@ -178,9 +203,6 @@ impl NormalLaw for Jkr {
             contact_radius: a,
         }
     }
-}
-
-impl Jkr {
     /// [`Jkr::sqrt_contact_radius`] lane by lane: each lane takes the Newton steps it would
     /// take alone, and keeps its value once it stops.
     #[inline(always)]

@@ -126,6 +126,7 @@ registry! {
     normal {
         hertz: Hertz,
         jkr: Jkr,
+        jkr_pulloff: JkrPulloff,
     }
     damping {
         restitution: Restitution,
