@@ -118,3 +118,57 @@ fn zero_surface_energy_is_hertz() {
     );
     assert!(f < f0, "adhesion lowers the force");
 }
+
+/// The Coulomb load of each convention (docs/physics.md): `jkr` (EDEM) the Hertz part
+/// 4 E* a^3 / (3 R*), `jkr_lammps` LAMMPS's |F + 2 F_po|, F_po = 3 pi gamma R*. At the overlap
+/// of no net force (a^3 = 9 pi gamma R*^2 / E*) they are 12 and 6 pi gamma R*; in compression
+/// they differ by 2 F_po - (Hertz part - F) and at the force minimum `jkr_lammps` still
+/// carries F_po.
+#[test]
+fn each_convention_loads_friction_as_its_code_does() {
+    use tilth_kernel::contact::NormalLaw;
+    use tilth_kernel::contact::laws::{jkr::Jkr, jkr_lammps::JkrLammps};
+    let (e, r) = (e_eff(), R / 2.0);
+    let po = 3.0 * PI * GAMMA * r;
+    let (edem, lammps) = (Jkr::new(e, GAMMA), JkrLammps(Jkr::new(e, GAMMA)));
+    let a0 = (9.0 * PI * GAMMA * r * r / e).cbrt();
+    let a_min = (9.0 * PI * GAMMA * r * r / (4.0 * e)).cbrt();
+    for (a, what) in [
+        (a0, "no net force"),
+        (2.0 * a0, "compression"),
+        (a_min * 1.0001, "near the minimum"),
+    ] {
+        let delta = a * a / r - (4.0 * PI * GAMMA * a / e).sqrt();
+        let c = contact_at(delta, DVec3::ZERO, 1e-6);
+        let (mut h1, mut h2) = ([a.sqrt()], [a.sqrt()]);
+        let (f1, f2) = (edem.force(&c, &mut h1), lammps.force(&c, &mut h2));
+        let hertz = 4.0 * e * a.powi(3) / (3.0 * r);
+        assert!(
+            (f1.elastic - f2.elastic).abs() < 1e-12 * po,
+            "{what}: one force"
+        );
+        assert!(
+            (f1.friction_load - hertz).abs() < 1e-9 * po,
+            "{what}: jkr loads {}",
+            f1.friction_load
+        );
+        let expected = (f2.elastic + 2.0 * po).abs();
+        assert!(
+            (f2.friction_load - expected).abs() < 1e-9 * po,
+            "{what}: jkr_lammps loads {}",
+            f2.friction_load
+        );
+        if what == "no net force" {
+            assert!((f1.friction_load - 12.0 * PI * GAMMA * r).abs() < 1e-6 * po);
+            assert!((f2.friction_load - 6.0 * PI * GAMMA * r).abs() < 1e-6 * po);
+        }
+    }
+    // Past the force minimum: jkr still pulls, jkr_lammps has let go and loads nothing.
+    let delta = 0.5 * (edem.pulloff_overlap(r) + edem.critical_overlap(r));
+    let c = contact_at(delta, DVec3::ZERO, 1e-6);
+    let a = a_min * 0.9;
+    let (mut h1, mut h2) = ([a.sqrt()], [a.sqrt()]);
+    assert!(edem.force(&c, &mut h1).elastic < 0.0);
+    let gone = lammps.force(&c, &mut h2);
+    assert_eq!((gone.elastic, gone.friction_load, h2[0]), (0.0, 0.0, 0.0));
+}

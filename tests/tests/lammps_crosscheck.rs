@@ -236,12 +236,12 @@ fn jkr_pull_off_matches_lammps() {
     );
 }
 
-/// `jkr_pulloff` is LAMMPS's `jkr` along LAMMPS's own pull (`pp_jkr_pulloff`, undamped, the
+/// `jkr_lammps` is LAMMPS's `jkr` along LAMMPS's own pull (`pp_jkr_pulloff`, undamped, the
 /// pair pulled apart at 2e-4 m/s from 4 um of overlap): the same force at every printed
 /// overlap, and the neck broken at the same rows, at the force minimum. `jkr` (EDEM's) keeps
 /// pulling there, down to delta_c.
 #[test]
-fn jkr_pulloff_breaks_where_lammps_does() {
+fn jkr_lammps_breaks_where_lammps_does() {
     let path = table("pp_jkr_pulloff.csv");
     let (overlaps, lammps) = (&path["overlap"], &path["fn"]);
     let pull_off = 3.0 * std::f64::consts::PI * 0.356 * (R / 2.0);
@@ -259,14 +259,14 @@ fn jkr_pulloff_breaks_where_lammps_does() {
             })
             .collect::<Vec<f64>>()
     };
-    let ours = law("jkr_pulloff");
+    let ours = law("jkr_lammps");
     let mut broken = 0;
     for ((d, f), l) in overlaps.iter().zip(&ours).zip(lammps) {
         // LAMMPS prints 12 significant digits; its contact radius solver's tolerance is
         // about 1e-9 of the pull-off force.
         assert!(
             (f - l).abs() < 1e-6 * pull_off,
-            "overlap {d}: jkr_pulloff {f} vs LAMMPS {l}"
+            "overlap {d}: jkr_lammps {f} vs LAMMPS {l}"
         );
         assert_eq!(
             *f == 0.0,

@@ -80,8 +80,19 @@ impl Jkr {
         a * a / r_eff - self.c * a.sqrt()
     }
 
+    /// The pull-off force F_po = 3 pi gamma R* (N): minus the least force on the curve.
+    pub fn pulloff_force(&self, r_eff: f64) -> f64 {
+        3.0 * PI * self.gamma * r_eff
+    }
+
+    /// [`Jkr::pulloff_force`] lane by lane.
+    #[inline(always)]
+    pub fn pulloff_force_lanes(&self, r_eff: F) -> F {
+        (3.0 * PI * self.gamma) * r_eff
+    }
+
     /// The overlap of the force minimum F_min = -3 pi gamma R* (m, <= 0) for contact radius
-    /// R*: delta(a_m), a_m = [9 pi gamma R*^2 / (4 E*)]^(1/3), where `jkr_pulloff` breaks.
+    /// R*: delta(a_m), a_m = [9 pi gamma R*^2 / (4 E*)]^(1/3), where `jkr_lammps` breaks.
     pub fn pulloff_overlap(&self, r_eff: f64) -> f64 {
         let a_m = (9.0 * PI * self.gamma * r_eff * r_eff / (4.0 * self.e_eff)).cbrt();
         self.overlap_at_radius(a_m, r_eff)
@@ -150,7 +161,7 @@ impl NormalLaw for Jkr {
 
 impl Jkr {
     /// The force of a contact whose neck breaks at `break_overlap` (m, <= 0): `jkr` passes
-    /// delta_c, `jkr_pulloff` the overlap of the force minimum.
+    /// delta_c, `jkr_lammps` the overlap of the force minimum.
     #[inline]
     pub fn force_breaking_at(&self, c: &Contact, history: &mut [f64], break_overlap: f64) -> NormalForce {
         // In tension the JKR neck exists only if it never broke: it forms on touching

@@ -126,7 +126,7 @@ registry! {
     normal {
         hertz: Hertz,
         jkr: Jkr,
-        jkr_pulloff: JkrPulloff,
+        jkr_lammps: JkrLammps,
     }
     damping {
         restitution: Restitution,

@@ -16,7 +16,7 @@ use super::Ctx;
 use super::PairPath;
 use crate::contact::dispatch::OfAny;
 use crate::contact::laws::{
-    cdt::Cdt, epsd::Epsd, hertz::Hertz, jkr::Jkr, jkr_pulloff::JkrPulloff, mindlin::Mindlin,
+    cdt::Cdt, epsd::Epsd, hertz::Hertz, jkr::Jkr, jkr_lammps::JkrLammps, mindlin::Mindlin,
     restitution::Restitution, sjkr::Sjkr,
 };
 use crate::contact::model::TypedModel;
@@ -96,8 +96,8 @@ compiled_sets! {
     /// The same with EPSD rolling resistance: the study's model (`models/li2022.toml`)
     /// until its bonds form.
     JkrMindlinEpsd(Jkr, Restitution, Mindlin, Epsd, NoExtra),
-    /// The study's model with LAMMPS's JKR break (`jkr_pulloff`).
-    JkrPulloffMindlinEpsd(JkrPulloff, Restitution, Mindlin, Epsd, NoExtra),
+    /// The study's model with LAMMPS's JKR (`jkr_lammps`).
+    JkrLammpsMindlinEpsd(JkrLammps, Restitution, Mindlin, Epsd, NoExtra),
 }
 
 #[cfg(test)]
@@ -132,7 +132,7 @@ mod tests {
             .chain(rolling)
             .collect();
         let needed = |k: &str| match k {
-            "surface_energy" => keys.contains(&"jkr") || keys.contains(&"jkr_pulloff"),
+            "surface_energy" => keys.contains(&"jkr") || keys.contains(&"jkr_lammps"),
             "cohesion_energy_density" => keys.contains(&"sjkr"),
             "twisting_friction" | "twisting_damping" => keys.contains(&"twisting"),
             "rolling_friction" => rolling.is_some(),
@@ -159,7 +159,7 @@ mod tests {
             Some(CompiledLaws::HertzMindlinCdt(_)) => "HertzMindlinCdt",
             Some(CompiledLaws::JkrMindlinCdt(_)) => "JkrMindlinCdt",
             Some(CompiledLaws::JkrMindlinEpsd(_)) => "JkrMindlinEpsd",
-            Some(CompiledLaws::JkrPulloffMindlinEpsd(_)) => "JkrPulloffMindlinEpsd",
+            Some(CompiledLaws::JkrLammpsMindlinEpsd(_)) => "JkrLammpsMindlinEpsd",
             None => "enums",
         }
     }
@@ -178,8 +178,8 @@ mod tests {
         assert_eq!(set_of(&model("jkr", None, &[])), "JkrMindlinCdt");
         assert_eq!(set_of(&model("jkr", Some("epsd"), &[])), "JkrMindlinEpsd");
         assert_eq!(
-            set_of(&model("jkr_pulloff", Some("epsd"), &[])),
-            "JkrPulloffMindlinEpsd"
+            set_of(&model("jkr_lammps", Some("epsd"), &[])),
+            "JkrLammpsMindlinEpsd"
         );
         // No set: a law outside every set, an extra the set has not, two extras.
         assert_eq!(set_of(&model("hertz", Some("epsd"), &[])), "enums");
