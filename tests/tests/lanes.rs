@@ -39,6 +39,7 @@ fn models() -> Vec<(String, ContactModel)> {
     let specs = [
         with("hertz", "mindlin", Some("cdt"), &["sjkr"]),
         with("jkr", "mindlin", Some("epsd"), &[]),
+        with("jkr_lammps", "mindlin", Some("cdt"), &[]),
         with(
             "hertz",
             "mindlin_incremental",
