@@ -146,7 +146,7 @@ impl Jkr {
 impl NormalLaw for Jkr {
     #[inline]
     fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce {
-        self.force_breaking_at(c, history, self.critical_overlap(c.r_eff))
+        self.force_breaking_at(c, history, |r| self.critical_overlap(r))
     }
 
     fn reach(&self, r_eff: f64) -> f64 {
@@ -160,15 +160,21 @@ impl NormalLaw for Jkr {
 }
 
 impl Jkr {
-    /// The force of a contact whose neck breaks at `break_overlap` (m, <= 0): `jkr` passes
-    /// delta_c, `jkr_lammps` the overlap of the force minimum.
+    /// The force of a contact whose neck breaks at the overlap `break_overlap(R*)` (m, <= 0),
+    /// asked only in tension: `jkr` passes delta_c, `jkr_lammps` the overlap of the force
+    /// minimum.
     #[inline]
-    pub fn force_breaking_at(&self, c: &Contact, history: &mut [f64], break_overlap: f64) -> NormalForce {
+    pub fn force_breaking_at(
+        &self,
+        c: &Contact,
+        history: &mut [f64],
+        break_overlap: impl Fn(f64) -> f64,
+    ) -> NormalForce {
         // In tension the JKR neck exists only if it never broke: it forms on touching
         // (history set) and breaks for good at `break_overlap` (history cleared). Another
         // law with a longer reach (a liquid bridge) can keep the pair in contact beyond it,
         // where the stable branch may no longer exist.
-        if c.overlap <= 0.0 && (self.gamma == 0.0 || history[0] == 0.0 || c.overlap <= break_overlap) {
+        if c.overlap <= 0.0 && (self.gamma == 0.0 || history[0] == 0.0 || c.overlap <= break_overlap(c.r_eff)) {
             history[0] = 0.0;
             return NormalForce::default();
         }

@@ -59,7 +59,7 @@ impl NormalLaw for JkrLammps {
     fn force(&self, c: &Contact, history: &mut [f64]) -> NormalForce {
         let mut out = self
             .0
-            .force_breaking_at(c, history, self.0.pulloff_overlap(c.r_eff));
+            .force_breaking_at(c, history, |r| self.0.pulloff_overlap(r));
         if out.contact_radius > 0.0 {
             out.friction_load = (out.elastic + 2.0 * self.0.pulloff_force(c.r_eff)).abs();
         }
