@@ -41,12 +41,15 @@ pub const SURFACE_ENERGY: ParamSpec = ParamSpec {
     doc: "JKR surface energy gamma (EDEM convention)",
 };
 
+/// The history a contact of [`Jkr`] keeps: sqrt(a), Newton's next start (see the module).
+pub const HISTORY: &[&str] = &["jkr_sqrt_contact_radius"];
+
 pub const ENTRY: LawEntry = LawEntry {
     name: "jkr",
     slot: Slot::Normal,
     summary: "JKR adhesive normal force (EDEM Hertz-Mindlin with JKR)",
     params: &[SURFACE_ENERGY],
-    history: &["jkr_sqrt_contact_radius"],
+    history: HISTORY,
     cohesive: true,
     allows_cohesion: true,
     build,

@@ -30,7 +30,7 @@
 //! assert!(jkr.pulloff_overlap(r) > jkr.critical_overlap(r));
 //! ```
 
-use super::jkr::{Jkr, SURFACE_ENERGY};
+use super::jkr::{HISTORY, Jkr, SURFACE_ENERGY};
 use crate::contact::{
     BuiltLaw, Contact, ContactLanes, F, LawEntry, LawInput, NormalForce, NormalForceLanes,
     NormalLaw, Slot,
@@ -41,7 +41,8 @@ pub const ENTRY: LawEntry = LawEntry {
     slot: Slot::Normal,
     summary: "JKR adhesive normal force as LAMMPS's granular jkr (broken at the force minimum, friction loaded by |F + 2 F_pulloff|)",
     params: &[SURFACE_ENERGY],
-    history: &["jkr_sqrt_contact_radius"],
+    // The force is Jkr's, so is its history.
+    history: HISTORY,
     cohesive: true,
     allows_cohesion: true,
     build,
