@@ -29,9 +29,10 @@ pub(super) struct Rig {
 }
 
 impl Rig {
-    /// The rig of `p` with a funnel outlet `outlet` m wide, for particles of diameter `d` m.
-    pub(super) fn new(p: &ReposeParams, outlet: f64, d: f64) -> Rig {
-        let z_tray = p.stand_height + p.tray_height;
+    /// The rig of `p` with a funnel outlet `outlet` m wide, for particles of diameter `d` m,
+    /// the tray on a stand `stand` m high.
+    pub(super) fn new(p: &ReposeParams, outlet: f64, d: f64, stand: f64) -> Rig {
+        let z_tray = stand + p.tray_height;
         let z_out = z_tray + p.drop_height;
         let (r_out, r_in) = (0.5 * outlet, 0.5 * p.funnel_inlet_diameter);
         Rig {

@@ -1,8 +1,8 @@
 //! `repose`: the funnel repose-angle test (FT-104B tester; docs/experiments.md).
 //!
 //! A steel funnel (inlet 135 mm, outlet 20 mm, 140 mm high) stands coaxially above a steel
-//! tray (a ring knife of 61.8 mm diameter and 20 mm height) on a steel floor, or on a stand
-//! `stand_height` above it. Soil particles are generated in the funnel's upper part at
+//! tray (a ring knife of 61.8 mm diameter and 20 mm height) on a stand `stand_height` above
+//! a steel floor (at the study's scale; on the floor at the coarse preset). Soil particles are generated in the funnel's upper part at
 //! `rate` until `mass_g` is in, flow out, and heap on the tray; what overflows falls to the
 //! floor. The run ends when the heap is at rest: mean particle speed below `rest_speed` and
 //! the heap's cone angle steady to `rest_angle` degrees over `rest_time` seconds, or the mean
@@ -58,16 +58,15 @@ pub struct ReposeParams {
     /// Height of the tray (the ring knife), m (the study: 20 mm).
     #[serde(default = "default_tray_height")]
     pub tray_height: f64,
-    /// Height of the stand under the tray, m (default 0: the tray on the floor that
-    /// catches the overflow). Fixed-base methods (ISO 4324, GB/T 16913.5) let what
-    /// overflows fall away from the platform, so that the tray's edge bounds the heap. On
-    /// the floor, the study's 200 g of 2 mm grains piled up around the tray and past its
-    /// rim: the heap rested on that pile, held 39.5 g instead of 17.0 g and stood at 41.2
-    /// instead of 26.3 degrees; set 0.1 for runs at the study's scale. The coarse preset's
-    /// 40 g cannot bury the rim, and the discovery proof is built on the floor
-    /// (docs/li2022-compare.md, "The tray's stand").
-    #[serde(default = "default_stand_height")]
-    pub stand_height: f64,
+    /// Height of the stand under the tray, m; 0 puts the tray on the floor that catches the
+    /// overflow. Default 0.1 (coarse preset: 0). Fixed-base methods (ISO 4324, GB/T
+    /// 16913.5) let what overflows fall away from the platform, so that the tray's edge
+    /// bounds the heap. On the floor, the study's 200 g of 2 mm grains piled up around the
+    /// tray and past its rim: the heap rested on that pile, held 39.5 g instead of 17.0 g
+    /// and stood at 41.2 instead of 26.3 degrees. The coarse preset's 40 g cannot bury the
+    /// rim, and the discovery proof is built on the floor (docs/li2022-compare.md, "The
+    /// tray's stand").
+    pub stand_height: Option<f64>,
     /// At rest: mean particle speed below this, m/s.
     #[serde(default = "default_rest_speed")]
     pub rest_speed: f64,
@@ -106,9 +105,6 @@ fn default_tray_diameter() -> f64 {
 fn default_tray_height() -> f64 {
     0.020
 }
-fn default_stand_height() -> f64 {
-    0.0
-}
 fn default_rest_speed() -> f64 {
     0.005
 }
@@ -141,7 +137,12 @@ fn positive(key: &str, v: f64, unit: &str) -> Result<f64> {
 
 /// The scene and protocol of a repose test.
 pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
-    let Checked { d, mass, outlet } = check(c, p)?;
+    let Checked {
+        d,
+        mass,
+        outlet,
+        stand,
+    } = check(c, p)?;
     let rho = soil_density(c.model)?;
     let mix = SizeMix::of(c.model, c.at(), d)?;
     let count = mix.count(mass * 1e-3 / rho);
@@ -153,7 +154,7 @@ pub fn build(c: &Common, p: &ReposeParams) -> Result<Built> {
         None => c.sim.dt_fraction * rayleigh_time(c.model, mix.min_diameter())?,
     };
     let parts = c.model.scene_parts(c.at(), false)?;
-    let rig = Rig::new(p, outlet, d);
+    let rig = Rig::new(p, outlet, d, stand);
     let scene = scene::scene(
         parts,
         rig.simulation(c, p, dt, &mix),
@@ -175,6 +176,8 @@ struct Checked {
     mass: f64,
     /// Funnel outlet diameter, m.
     outlet: f64,
+    /// The tray's stand, m.
+    stand: f64,
 }
 
 /// Refuses parameters out of range and a funnel the particles would jam.
@@ -200,11 +203,9 @@ fn check(c: &Common, p: &ReposeParams) -> Result<Checked> {
             ("max_time", p.max_time),
         ],
     )?;
-    if !(p.stand_height >= 0.0 && p.stand_height.is_finite()) {
-        bail!(
-            "repose.stand_height = {} is out of range: allowed [0, inf) m",
-            p.stand_height
-        );
+    let stand = p.stand_height.unwrap_or(if c.coarse { 0.0 } else { 0.1 });
+    if !(stand >= 0.0 && stand.is_finite()) {
+        bail!("repose.stand_height = {stand} is out of range: allowed [0, inf) m");
     }
     if !(1..=180).contains(&p.photographs) {
         bail!(
@@ -226,5 +227,10 @@ fn check(c: &Common, p: &ReposeParams) -> Result<Checked> {
     if p.funnel_inlet_diameter <= outlet {
         bail!("repose.funnel_inlet_diameter must be larger than funnel_outlet_diameter");
     }
-    Ok(Checked { d, mass, outlet })
+    Ok(Checked {
+        d,
+        mass,
+        outlet,
+        stand,
+    })
 }

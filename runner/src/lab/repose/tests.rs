@@ -167,3 +167,33 @@ fn a_still_heap_is_at_rest_a_rest_time_after_the_pour() {
     assert!((a - angle(top)).abs() < 1e-9, "{e}");
     assert!(e["warning"].is_null(), "{e}");
 }
+
+/// The tray's top (m above the floor) in the study's funnel test as built at `scale`, with
+/// `repose` lines added to the experiment.
+fn tray_top(coarse: bool, repose: &str) -> f64 {
+    let text = format!(
+        "format_version = 1\nexperiment = \"repose\"\nmodel = \"models/li2022.toml\"\n\
+         coarse = {coarse}\n[conditions]\nmoisture_pct = 6\n[repose]\n{repose}\n"
+    );
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let built =
+        crate::lab::experiment::build(toml::from_str(&text).unwrap(), "test", &root, &[]).unwrap();
+    let walls = built.scene["walls"].as_array().unwrap();
+    let tray = walls
+        .iter()
+        .find(|w| w["name"].as_str() == Some("tray"))
+        .unwrap();
+    tray["centre"][2].as_float().unwrap()
+}
+
+/// At the study's scale the tray stands on a 100 mm stand, so that the overflow of 200 g
+/// falls away from its rim (docs/li2022-compare.md, "The tray's stand"); the coarse preset
+/// keeps it on the floor; a given `stand_height` wins at either scale.
+#[test]
+fn the_tray_stands_on_a_stand_at_the_studys_scale_and_on_the_floor_coarse() {
+    let tray = ReposeParams::default().tray_height;
+    assert_eq!(tray_top(false, ""), 0.1 + tray);
+    assert_eq!(tray_top(true, ""), tray);
+    assert_eq!(tray_top(false, "stand_height = 0.03"), 0.03 + tray);
+    assert_eq!(tray_top(true, "stand_height = 0.03"), 0.03 + tray);
+}
