@@ -2,6 +2,7 @@
 """Measurements of the funnel repose test made by LAMMPS, for the discovery loop (README.md).
 
     tests/golden/lammps-funnel/regen.py [--replicates 4] [--jobs 2]
+    tests/golden/lammps-funnel/regen.py --scale study --cases base --levels 6   # the study's 2 mm
 
 For each case (`base`: the model of models/li2022.toml as LAMMPS writes it; `twisting`: the
 same with LAMMPS's `twisting marshall`, an effect the model lacks) and each moisture level it
@@ -20,6 +21,7 @@ import random
 import statistics
 import subprocess
 import tempfile
+import time
 import tomllib
 from pathlib import Path
 
@@ -28,15 +30,32 @@ MODEL = HERE.parents[2] / "models" / "li2022.toml"
 LEVELS = [3.0, 6.0, 9.0, 12.0]
 CASES = {"base": "twisting none", "twisting": "twisting marshall"}
 
-# The lab's coarse preset of the funnel test (runner/src/lab/repose/mod.rs), m, kg, s.
-D = 0.004
-MASS_G = 40.0
-TRAY_R, Z_TRAY, Z_OUT = 0.0618 / 2, 0.020, 0.080
+# The funnel test's rig (runner/src/lab/repose/funnel.rs with the experiment's defaults), m.
+TRAY_R, TRAY_H, DROP = 0.0618 / 2, 0.020, 0.060
 R_OUT, R_IN, FUNNEL_H = 0.020, 0.0675, 0.140
-Z_FILL = Z_OUT + 0.6 * FUNNEL_H
-R_FILL = R_OUT + (R_IN - R_OUT) * 0.6 - D
-FILL_H = Z_OUT + FUNNEL_H - Z_FILL - D
 HALF = max(R_IN, 0.15) + 0.05
+GRAVITY = 9.81
+
+
+class Scale:
+    """A preset of the lab's funnel test: grain diameter D (m), soil poured MASS_G (g), how it
+    comes in (all at once, the coarse preset's fill; or at RATE grains/s, the study's factory,
+    by LAMMPS's `fix pour`), and the tray's stand (m; the tray and its stand are one closed
+    cylinder on the floor)."""
+
+    def __init__(self, name, d, mass_g, rate, stand):
+        self.name, self.D, self.MASS_G, self.RATE = name, d, mass_g, rate
+        self.Z_TRAY = stand + TRAY_H
+        self.Z_OUT = self.Z_TRAY + DROP
+        self.Z_TOP = self.Z_OUT + FUNNEL_H
+        # The fill: the funnel's upper 40 %, one diameter inside its wall and top.
+        self.Z_FILL = self.Z_OUT + 0.6 * FUNNEL_H
+        self.R_FILL = R_OUT + (R_IN - R_OUT) * 0.6 - d
+        self.FILL_H = self.Z_TOP - self.Z_FILL - d
+
+
+# The lab's presets (runner/src/lab/repose/mod.rs): coarse on the floor, the study's on a stand.
+SCALES = {"coarse": Scale("coarse", 0.004, 40.0, None, 0.0), "study": Scale("study", 0.002, 200.0, 20000.0, 0.1)}
 HEAP_SPEED = 0.05  # observe::HEAP_SPEED
 DT_FRACTION = 0.35  # sweeps/experiments/repose.toml
 MAX_TIME = 8.0
@@ -96,13 +115,13 @@ def rolling_sds(mu_r, e_star, r_star, gamma, mass, radius):
     return k, g, mu_r
 
 
-def parameters(model, moisture, twist):
+def parameters(model, moisture, twist, d):
     soil, steel = model["materials"]["soil"], model["materials"]["steel"]
     ss, sw = model["pairs"]["soil-soil"], model["pairs"]["soil-steel"]
     if at(sw["surface_energy"], moisture) != 0.0:
         raise SystemExit("soil-steel surface_energy must be 0: the walls here are hertz/material")
-    radius = D / 2
-    mass = soil["density"] * math.pi / 6 * D**3
+    radius = d / 2
+    mass = soil["density"] * math.pi / 6 * d**3
     gamma = at(ss["surface_energy"], moisture)
     e_ss, g_ss = moduli(soil, soil)
     e_sw, g_sw = moduli(soil, steel)
@@ -120,22 +139,23 @@ def parameters(model, moisture, twist):
     }, mass
 
 
-def packing(path, seed, mass):
+def packing(path, seed, mass, scale):
     """The pour's grains at random, apart, in the funnel's fill cylinder, moving down at 0.2
-    m/s as the lab's factory makes them."""
-    count = round(MASS_G * 1e-3 / mass)
+    m/s as the lab's factory makes them; none when `fix pour` makes them (scale.RATE)."""
+    D = scale.D
+    count = 0 if scale.RATE else round(scale.MASS_G * 1e-3 / mass)
     rng = random.Random(seed)
     placed = []
     while len(placed) < count:
-        r = (R_FILL) * math.sqrt(rng.random())
+        r = scale.R_FILL * math.sqrt(rng.random())
         phi = 2 * math.pi * rng.random()
-        p = (r * math.cos(phi), r * math.sin(phi), Z_FILL + D / 2 + (FILL_H - D) * rng.random())
+        p = (r * math.cos(phi), r * math.sin(phi), scale.Z_FILL + D / 2 + (scale.FILL_H - D) * rng.random())
         if all((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2 >= D * D for q in placed):
             placed.append(p)
     density = mass / (math.pi / 6 * D**3)
     with open(path, "w") as f:
         f.write(f"tilth funnel pour, seed {seed}\n\n{count} atoms\n1 atom types\n\n")
-        f.write(f"{-HALF} {HALF} xlo xhi\n{-HALF} {HALF} ylo yhi\n-0.005 {Z_OUT + FUNNEL_H + 0.05} zlo zhi\n\nAtoms # sphere\n\n")
+        f.write(f"{-HALF} {HALF} xlo xhi\n{-HALF} {HALF} ylo yhi\n-0.005 {scale.Z_TOP + 0.05} zlo zhi\n\nAtoms # sphere\n\n")
         for k, p in enumerate(placed, 1):
             f.write(f"{k} 1 {D} {density!r} {p[0]!r} {p[1]!r} {p[2]!r}\n")
         f.write("\nVelocities\n\n")
@@ -154,8 +174,9 @@ def crossing(samples, level):
     return None
 
 
-def reduce(out):
-    """The four readings of one run."""
+def reduce(out, scale):
+    """The four readings of one run; the flow rate is None when the funnel held back more
+    than a fifth of the soil (no t80)."""
     rows = []
     with open(f"{out}.final.dump") as f:
         lines = f.read().splitlines()
@@ -165,48 +186,72 @@ def reduce(out):
         rows.append((x, y, z, math.sqrt(vx * vx + vy * vy + vz * vz), r, m))
     top, tray = 0.0, 0.0
     for x, y, z, v, r, m in rows:
-        if math.hypot(x, y) <= TRAY_R and Z_TRAY < z < Z_OUT and v < HEAP_SPEED:
-            top = max(top, z + r - Z_TRAY)
+        if math.hypot(x, y) <= TRAY_R and scale.Z_TRAY < z < scale.Z_OUT and v < HEAP_SPEED:
+            top = max(top, z + r - scale.Z_TRAY)
             tray += m
     samples = []
     with open(f"{out}.flow") as f:
         for line in f:
             if not line.startswith("#"):
                 t, below = map(float, line.split())
-                samples.append((t, below * 1e3 / MASS_G))
+                samples.append((t, below * 1e3 / scale.MASS_G))
     t20, t80 = crossing(samples, 0.2), crossing(samples, 0.8)
     return {
         "heap_cone_angle_deg": math.degrees(math.atan(top / TRAY_R)),
         "tray_mass_g": tray * 1e3,
-        "funnel_flow_rate_g_s": 0.6 * MASS_G / (t80 - t20),
-        "funnel_residue_g": sum(m for _, _, z, _, _, m in rows if z > Z_OUT) * 1e3,
+        "funnel_flow_rate_g_s": 0.6 * scale.MASS_G / (t80 - t20) if t80 is not None else None,
+        "funnel_residue_g": sum(m for _, _, z, _, _, m in rows if z > scale.Z_OUT) * 1e3,
     }
 
 
+def pour_vars(scale, mass, density, seed, dt):
+    """fix pour's arguments for the lab's factory: `count` grains at scale.RATE a second. fix
+    pour inserts a burst every time a grain takes to fall through the fill (from rest at -0.2
+    m/s under gravity, fix_pour.cpp), of vol * V_fill / V_grain grains; vol is chosen so the
+    bursts average the factory's rate. Also returns when the last burst comes in (s)."""
+    d, count = scale.D, round(scale.MASS_G * 1e-3 / mass)
+    fall = (0.2 - math.sqrt(0.04 + 2 * GRAVITY * scale.FILL_H)) / -GRAVITY
+    nfreq = int(fall / dt + 0.5)
+    per_burst = round(scale.RATE * nfreq * dt)
+    volume, grain = math.pi * scale.R_FILL**2 * scale.FILL_H, math.pi / 6 * d**3
+    bursts = math.ceil(count / per_burst)
+    return {"pour": count, "seed": 1000 + seed, "rfill": scale.R_FILL, "zfill0": scale.Z_FILL,
+            "zfill1": scale.Z_FILL + scale.FILL_H + d, "d": d, "rho": density,
+            "vol": (per_burst + 0.5) * grain / volume}, (bursts - 1) * nfreq * dt
+
+
 def run_one(job):
-    case, moisture, seed, model, lmp, work = job
-    params, mass = parameters(model, moisture, CASES[case])
+    case, moisture, seed, model, lmp, work, scale = job
+    params, mass = parameters(model, moisture, CASES[case], scale.D)
     tag = f"{case}-{moisture:g}-{seed}"
     data, out = f"{work}/{tag}.data", f"{work}/{tag}"
-    packing(data, seed, mass)
+    packing(data, seed, mass, scale)
     # The lab's step: DT_FRACTION of the Rayleigh time pi R sqrt(rho/G) / (0.1631 nu + 0.8766).
     soil = model["materials"]["soil"]
     shear = soil["youngs_modulus"] / (2 * (1 + soil["poisson_ratio"]))
-    dt = DT_FRACTION * math.pi * D / 2 * math.sqrt(soil["density"] / shear) / (0.1631 * soil["poisson_ratio"] + 0.8766)
+    dt = DT_FRACTION * math.pi * scale.D / 2 * math.sqrt(soil["density"] / shear) / (0.1631 * soil["poisson_ratio"] + 0.8766)
+    poured = 0.0
+    if scale.RATE:
+        extra, poured = pour_vars(scale, mass, soil["density"], seed, dt)
+        params.update(extra)
     args = [lmp, "-in", str(HERE / "funnel.lammps"), "-log", "none", "-screen", f"{out}.screen",
             "-var", "data", data, "-var", "out", out, "-var", "dt", repr(dt),
             "-var", "sample", str(round(1e-3 / dt)), "-var", "check", str(round(0.02 / dt)),
-            "-var", "steps", str(round(MAX_TIME / dt))]
+            "-var", "steps", str(round(MAX_TIME / dt)), "-var", "skin", repr(0.6 * scale.D),
+            "-var", "ztray", repr(scale.Z_TRAY), "-var", "zout", repr(scale.Z_OUT), "-var", "ztop", repr(scale.Z_TOP),
+            "-var", "tmin", repr(poured + 0.3)]
     for key, value in params.items():
         args += ["-var", key, value if isinstance(value, str) else repr(value)]
+    started = time.monotonic()
     done = subprocess.run(args, cwd=work, capture_output=True, text=True)
     if done.returncode != 0:
         tail = Path(f"{out}.screen").read_text().splitlines()[-15:] if Path(f"{out}.screen").exists() else []
         raise SystemExit(f"LAMMPS failed on {tag}:\n" + "\n".join(tail) + done.stderr)
-    readings = reduce(out)
+    readings = reduce(out, scale)
     with open(f"{out}.screen") as f:
         last = [l for l in f.read().splitlines() if l.strip() and l.split()[0].isdigit()][-1].split()
     readings["simulated_s"] = float(last[1])
+    readings["wall_s"] = time.monotonic() - started
     return case, moisture, seed, readings
 
 
@@ -215,35 +260,45 @@ def main():
     ap.add_argument("--replicates", type=int, default=4)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--scale", choices=list(SCALES), default="coarse",
+                    help="coarse: 40 g of 4 mm, all at once; study: 200 g of 2 mm at 20,000/s (files study-*.csv)")
+    ap.add_argument("--levels", default=",".join(f"{m:g}" for m in LEVELS), help="moisture levels, %%")
+    ap.add_argument("--keep", help="keep LAMMPS's files in this directory")
     args = ap.parse_args()
+    scale, levels = SCALES[args.scale], [float(m) for m in args.levels.split(",")]
+    prefix = "" if scale.name == "coarse" else f"{scale.name}-"
     model = tomllib.loads(MODEL.read_text())
     lmp = os.environ.get("LMP", "lmp")
     version = subprocess.run([lmp, "-h"], capture_output=True, text=True).stdout.splitlines()
     version = next((l.strip() for l in version if "Large-scale" in l), "LAMMPS")
     cases = args.cases.split(",")
-    with tempfile.TemporaryDirectory() as work:
-        jobs = [(c, m, s, model, lmp, work) for c in cases for m in LEVELS for s in range(1, args.replicates + 1)]
+    with tempfile.TemporaryDirectory() as temp:
+        work = args.keep or temp
+        os.makedirs(work, exist_ok=True)
+        jobs = [(c, m, s, model, lmp, work, scale) for c in cases for m in levels for s in range(1, args.replicates + 1)]
         with cf.ProcessPoolExecutor(args.jobs) as pool:
             results = list(pool.map(run_one, jobs))
     for case in cases:
         mine = [r for r in results if r[0] == case]
-        with open(HERE / f"{case}-runs.csv", "w", newline="") as f:
+        with open(HERE / f"{prefix}{case}-runs.csv", "w", newline="") as f:
             w = csv.writer(f)
-            keys = list(UNITS) + ["simulated_s"]
+            keys = list(UNITS) + ["simulated_s"] + (["wall_s"] if prefix else [])
             w.writerow(["moisture_pct", "seed"] + keys)
             for _, m, s, rd in mine:
-                w.writerow([f"{m:g}", s] + [f"{rd[k]:.6g}" for k in keys])
-        with open(HERE / f"{case}.csv", "w", newline="") as f:
+                w.writerow([f"{m:g}", s] + ["" if rd[k] is None else f"{rd[k]:.6g}" for k in keys])
+        with open(HERE / f"{prefix}{case}.csv", "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["test", "moisture_pct", "firmness_mpa", "normal_pressure_pa", "observable", "value", "unit", "uncertainty", "replicates", "source"])
-            for m in LEVELS:
+            for m in levels:
                 for key, unit in UNITS.items():
-                    xs = [rd[key] for _, mm, _, rd in mine if mm == m]
+                    xs = [rd[key] for _, mm, _, rd in mine if mm == m and rd[key] is not None]
+                    if len(xs) < 2:
+                        continue  # the flow rate of a funnel that held the soil back
                     floor = FLOOR[key] * (statistics.fmean(xs) if key == "funnel_flow_rate_g_s" else 1.0)
                     se = math.sqrt(statistics.variance(xs) / len(xs) + floor**2)
                     w.writerow(["repose", f"{m:g}", "", "", key, f"{statistics.fmean(xs):.6g}", unit, f"{se:.4g}", len(xs),
-                                f"LAMMPS ({version}), tests/golden/lammps-funnel/funnel.lammps, case {case}, coarse"])
-        print(f"wrote {case}.csv and {case}-runs.csv")
+                                f"LAMMPS ({version}), tests/golden/lammps-funnel/funnel.lammps, case {case}, {scale.name}"])
+        print(f"wrote {prefix}{case}.csv and {prefix}{case}-runs.csv")
 
 
 if __name__ == "__main__":
