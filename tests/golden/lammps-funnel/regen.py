@@ -21,7 +21,6 @@ import random
 import statistics
 import subprocess
 import tempfile
-import time
 import tomllib
 from pathlib import Path
 
@@ -242,7 +241,6 @@ def run_one(job):
             "-var", "tmin", repr(poured + 0.3)]
     for key, value in params.items():
         args += ["-var", key, value if isinstance(value, str) else repr(value)]
-    started = time.monotonic()
     done = subprocess.run(args, cwd=work, capture_output=True, text=True)
     if done.returncode != 0:
         tail = Path(f"{out}.screen").read_text().splitlines()[-15:] if Path(f"{out}.screen").exists() else []
@@ -251,7 +249,6 @@ def run_one(job):
     with open(f"{out}.screen") as f:
         last = [l for l in f.read().splitlines() if l.strip() and l.split()[0].isdigit()][-1].split()
     readings["simulated_s"] = float(last[1])
-    readings["wall_s"] = time.monotonic() - started
     return case, moisture, seed, readings
 
 
@@ -282,7 +279,7 @@ def main():
         mine = [r for r in results if r[0] == case]
         with open(HERE / f"{prefix}{case}-runs.csv", "w", newline="") as f:
             w = csv.writer(f)
-            keys = list(UNITS) + ["simulated_s"] + (["wall_s"] if prefix else [])
+            keys = list(UNITS) + ["simulated_s"]
             w.writerow(["moisture_pct", "seed"] + keys)
             for _, m, s, rd in mine:
                 w.writerow([f"{m:g}", s] + ["" if rd[k] is None else f"{rd[k]:.6g}" for k in keys])
