@@ -11,14 +11,15 @@
 #
 # Environment as hidden_effect.sh (setup.sh), and MENU (default models/li2022-menu.csv),
 # NOISE_MORE (the injected noise of the readings the menu adds; default 4 % of the peak shear
-# force and of the UCS, 2 deg of the outline-fit repose angle), SHIFT=PAIR.KEY=DELTA (moves
+# force and of the UCS, 2 deg of the outline-fit repose angle, 0.015 of the tilting plate's
+# static friction and 0.5 deg of its angle: an inclinometer read to half a degree), SHIFT=PAIR.KEY=DELTA (moves
 # a parameter of the truth, as null_study.sh), TRUTH_MODEL (the truth's model file, default
 # the model's: a truth with an effect no candidate implements).
 set -euo pipefail
 effect=$1 strength=$2 out=$3 seed=${4:-1}
 source "$(dirname "$0")/setup.sh"
 menu=${MENU:-models/li2022-menu.csv}
-noise_all="$NOISE,${NOISE_MORE:-peak_shear_force_n=4%,ucs_kpa=4%,repose_angle_deg=2}"
+noise_all="$NOISE,${NOISE_MORE:-peak_shear_force_n=4%,ucs_kpa=4%,repose_angle_deg=2,static_friction=0.015,slide_angle_deg=0.5}"
 truth=()
 [ "$effect" != none ] && truth+=(--with "$effect=$strength")
 [ -n "${SHIFT:-}" ] && truth+=(--shift "$SHIFT")

@@ -33,7 +33,8 @@ pub enum Command {
         #[command(subcommand)]
         command: sweep::SweepCommand,
     },
-    /// Reduce run MCAP files to the study's numbers: repose angle, peak shear force, UCS.
+    /// Reduce run MCAP files to the study's numbers: repose angle, peak shear force, UCS,
+    /// slide angle on the tilting plate.
     Reduce(reduce::ReduceArgs),
     /// Simulate every measured condition of a data file and compare (compare.json/csv/md).
     Compare(compare::CompareArgs),

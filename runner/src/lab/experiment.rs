@@ -2,7 +2,7 @@
 //!
 //! ```toml
 //! format_version = 1
-//! experiment = "repose"                 # repose | direct_shear | ucs
+//! experiment = "repose"                 # repose | direct_shear | ucs | tilt
 //! model = "../../models/li2022.toml"    # conditions -> materials and contact parameters
 //! [conditions]
 //! moisture_pct = 6
@@ -20,7 +20,7 @@
 
 use super::model::{At, Conditions, Model};
 use super::protocol::Protocol;
-use super::{repose, shear, ucs};
+use super::{repose, shear, tilt, ucs};
 use crate::config;
 use crate::config::target;
 use anyhow::{Context, Result, anyhow, bail};
@@ -33,7 +33,7 @@ use toml::Value;
 #[serde(deny_unknown_fields)]
 pub struct ExperimentFile {
     pub format_version: i64,
-    /// `repose`, `direct_shear` or `ucs`.
+    /// `repose`, `direct_shear`, `ucs` or `tilt`.
     pub experiment: String,
     /// Model file, relative to this file.
     pub model: String,
@@ -47,6 +47,7 @@ pub struct ExperimentFile {
     pub repose: Option<repose::ReposeParams>,
     pub direct_shear: Option<shear::ShearParams>,
     pub ucs: Option<ucs::UcsParams>,
+    pub tilt: Option<tilt::TiltParams>,
 }
 
 /// `[simulation]` of an experiment.
@@ -118,7 +119,7 @@ pub struct Built {
 }
 
 /// Which tests exist.
-pub const KINDS: [&str; 3] = ["repose", "direct_shear", "ucs"];
+pub const KINDS: [&str; 4] = ["repose", "direct_shear", "ucs", "tilt"];
 
 /// Whether a TOML document is an experiment file (it has `experiment = "..."`).
 pub fn is_experiment(v: &Value) -> bool {
@@ -175,34 +176,22 @@ pub fn build(
             file.experiment
         )
     };
+    let tables = [
+        ("repose", file.repose.is_some()),
+        ("direct_shear", file.direct_shear.is_some()),
+        ("ucs", file.ucs.is_some()),
+        ("tilt", file.tilt.is_some()),
+    ];
+    if let Some((name, _)) = tables.iter().find(|&&(name, given)| {
+        given && KINDS.contains(&file.experiment.as_str()) && name != file.experiment
+    }) {
+        return Err(wrong(name));
+    }
     let mut built = match file.experiment.as_str() {
-        "repose" => {
-            if file.direct_shear.is_some() {
-                return Err(wrong("direct_shear"));
-            }
-            if file.ucs.is_some() {
-                return Err(wrong("ucs"));
-            }
-            repose::build(&common, &file.repose.clone().unwrap_or_default())
-        }
-        "direct_shear" => {
-            if file.repose.is_some() {
-                return Err(wrong("repose"));
-            }
-            if file.ucs.is_some() {
-                return Err(wrong("ucs"));
-            }
-            shear::build(&common, &file.direct_shear.clone().unwrap_or_default())
-        }
-        "ucs" => {
-            if file.repose.is_some() {
-                return Err(wrong("repose"));
-            }
-            if file.direct_shear.is_some() {
-                return Err(wrong("direct_shear"));
-            }
-            ucs::build(&common, &file.ucs.clone().unwrap_or_default())
-        }
+        "repose" => repose::build(&common, &file.repose.clone().unwrap_or_default()),
+        "direct_shear" => shear::build(&common, &file.direct_shear.clone().unwrap_or_default()),
+        "ucs" => ucs::build(&common, &file.ucs.clone().unwrap_or_default()),
+        "tilt" => tilt::build(&common, &file.tilt.clone().unwrap_or_default()),
         other => bail!(
             "{origin}: experiment = \"{other}\" is unknown: allowed {}",
             KINDS.join(", ")
@@ -256,6 +245,7 @@ pub fn check_test_key(test: &str, key: &str, value: &Value) -> Result<(), String
         "repose" => v.try_into::<repose::ReposeParams>().map(|_| ()),
         "direct_shear" => v.try_into::<shear::ShearParams>().map(|_| ()),
         "ucs" => v.try_into::<ucs::UcsParams>().map(|_| ()),
+        "tilt" => v.try_into::<tilt::TiltParams>().map(|_| ()),
         other => return Err(format!("`{other}` is not a test")),
     };
     r.map_err(|e| one_line(&e))

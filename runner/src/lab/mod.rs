@@ -1,8 +1,8 @@
-//! The virtual laboratory: the reference study's three tests as experiments.
+//! The virtual laboratory: the reference study's tests as experiments.
 //!
 //! [`model`] maps test conditions to contact parameters; [`experiment`] reads an experiment
-//! file and builds its scene and [`protocol`]; [`repose`], [`shear`] and [`ucs`] are the tests,
-//! whose scenes [`scene`] assembles from the scene file's typed sections.
+//! file and builds its scene and [`protocol`]; [`repose`], [`shear`], [`ucs`] and [`tilt`]
+//! are the tests, whose scenes [`scene`] assembles from the scene file's typed sections.
 
 pub mod discharge;
 pub mod experiment;
@@ -15,4 +15,5 @@ pub mod settling_bed;
 pub mod shear;
 pub mod sizes;
 pub mod specimen;
+pub mod tilt;
 pub mod ucs;

@@ -435,7 +435,7 @@ mod tests {
         let e = evaluate_at(&v["typo"], At::test(&c, "ucs"))
             .unwrap_err()
             .to_string();
-        assert!(e.contains("repose, direct_shear, ucs"), "{e}");
+        assert!(e.contains("repose, direct_shear, ucs, tilt"), "{e}");
         let e = evaluate(&v["word"], &c).unwrap_err().to_string();
         assert!(e.contains("a condition's value is a number"), "{e}");
     }

@@ -42,7 +42,7 @@ pub struct CompareArgs {
     /// independent draws; a validation can take seeds no calibration run used.
     #[arg(long, default_value_t = 1)]
     pub first_seed: u64,
-    /// Only these tests (comma-separated: repose, direct_shear, ucs).
+    /// Only these tests (comma-separated: repose, direct_shear, ucs, tilt).
     #[arg(long, value_delimiter = ',')]
     pub tests: Vec<String>,
     #[command(flatten)]

@@ -37,7 +37,12 @@ use std::path::Path;
 /// (`lab::discharge`: the Hall-flowmeter reading) and the soil left in the funnel (weighed
 /// after the test). They respond to different physics: the flow rate to wall friction and
 /// cohesion much more than to rolling resistance, the residue to adhesion to the steel.
-pub const OBSERVABLES: [(&str, &str, &str); 7] = [
+///
+/// The tilting plate (`lab::tilt`) reads the angle at which a bonded sample slides on steel
+/// and its tangent, the static friction coefficient of the study's table 1: it responds to
+/// the soil-steel friction and to adhesion between soil and steel, hardly to the soil's
+/// own cohesion, which the sample's bonds hold.
+pub const OBSERVABLES: [(&str, &str, &str); 9] = [
     ("repose", "repose_angle_deg", "deg"),
     ("repose", "heap_cone_angle_deg", "deg"),
     ("repose", "tray_mass_g", "g"),
@@ -45,10 +50,12 @@ pub const OBSERVABLES: [(&str, &str, &str); 7] = [
     ("repose", "funnel_residue_g", "g"),
     ("direct_shear", "peak_shear_force_n", "N"),
     ("ucs", "ucs_kpa", "kPa"),
+    ("tilt", "static_friction", "-"),
+    ("tilt", "slide_angle_deg", "deg"),
 ];
 
 /// The tests, in order.
-pub const TESTS: [&str; 3] = ["repose", "direct_shear", "ucs"];
+pub const TESTS: [&str; 4] = ["repose", "direct_shear", "ucs", "tilt"];
 
 /// The observables a test measures, with their units; the first is the test's own.
 pub fn observables_of(test: &str) -> Vec<(&'static str, &'static str)> {
@@ -139,7 +146,7 @@ pub struct Measurement {
 pub fn conditions_of(test: &str) -> &'static [&'static str] {
     match test {
         "repose" => &CONDITIONS[..1],
-        "ucs" => &CONDITIONS[..2],
+        "ucs" | "tilt" => &CONDITIONS[..2],
         _ => &CONDITIONS[..],
     }
 }

@@ -1,4 +1,4 @@
-//! `tilth reduce repose|shear|ucs FILES... [--json] [--plot DIR]`: MCAP -> the study's numbers,
+//! `tilth reduce repose|shear|ucs|tilt FILES... [--json] [--plot DIR]`: MCAP -> the study's numbers,
 //! a plot per file, and Mohr-Coulomb over several shear files (the reducers are in
 //! `tilth_tools::reduce`).
 
@@ -16,6 +16,8 @@ pub enum Observable {
     Shear,
     /// Unconfined compressive strength with the corrected area.
     Ucs,
+    /// The angle at which the sample slides on the tilting plate, and its tangent.
+    Tilt,
 }
 
 #[derive(Debug, Args)]
@@ -112,6 +114,17 @@ fn write_reduce(args: &ReduceArgs, out: &mut dyn Write) -> Result<()> {
                     r.analysis.ucs_kpa, r.analysis.failure, r.analysis.strain_at_failure
                 );
                 (serde_json::to_value(&r)?, reduce::plot::ucs_svg(&r)?, line)
+            }
+            Observable::Tilt => {
+                let r = reduce::tilt(&run)?;
+                let line = match r.analysis.slide_angle_deg {
+                    Some(a) => format!(
+                        "slid at {a:.2} deg (static friction {:.3})",
+                        a.to_radians().tan()
+                    ),
+                    None => format!("did not slide up to {:.2} deg", r.analysis.max_angle_deg),
+                };
+                (serde_json::to_value(&r)?, reduce::plot::tilt_svg(&r)?, line)
             }
         };
         let what = format!("{:?}", args.what).to_lowercase();

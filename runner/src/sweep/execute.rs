@@ -318,7 +318,12 @@ impl SweepProgress {
 
 /// The observables a run's summary holds as reduced from its MCAP file (`RunSummary::reduced`),
 /// in the order of results.csv's columns.
-const REDUCED: [&str; 3] = ["repose_angle_deg", "peak_shear_force_n", "ucs_kpa"];
+const REDUCED: [&str; 4] = [
+    "repose_angle_deg",
+    "peak_shear_force_n",
+    "ucs_kpa",
+    "slide_angle_deg",
+];
 
 /// One finished run in a log: its place in this invocation, its factor settings, status, wall
 /// time and the observable reduced from its MCAP file.

@@ -68,7 +68,7 @@ fn an_unknown_test_is_named_with_its_row() {
         &[
             "row 3, column test",
             "`heap` is unknown",
-            "allowed: repose, direct_shear, ucs",
+            "allowed: repose, direct_shear, ucs, tilt",
         ],
     );
 }

@@ -91,7 +91,7 @@ fn a_bad_set_is_refused_before_any_run() {
         ),
         (
             "funnel.mass_g=300",
-            &["`funnel` is not a test", "repose, direct_shear, ucs"],
+            &["`funnel` is not a test", "repose, direct_shear, ucs, tilt"],
         ),
         ("repose.mass_g", &["--set repose.mass_g", "TEST.KEY=VALUE"]),
         ("repose.mass_g=lots", &["`lots` is not a value"]),

@@ -7,11 +7,13 @@
 //!   (silhouette halves fitted in a height band), with a cone fit as cross-check;
 //! - [`shear`]: peak shear force of a direct shear run; [`mohr_coulomb`] fits
 //!   tau = c + sigma tan(phi) through several runs' peaks;
-//! - [`ucs`]: unconfined compressive strength on the corrected area.
+//! - [`ucs`]: unconfined compressive strength on the corrected area;
+//! - [`tilt`]: the angle at which a sample slides on a tilting steel plate.
 //!
 //! Every result is `Serialize` to one flat JSON object with the stable key of its number
-//! (`repose_angle_deg`, `peak_shear_force_n`, `ucs_kpa`) beside `file`, `complete` and
-//! `incomplete_reason`, and the curve or silhouette it came from. [`plot`] draws each as SVG.
+//! (`repose_angle_deg`, `peak_shear_force_n`, `ucs_kpa`, `slide_angle_deg`) beside `file`,
+//! `complete` and `incomplete_reason`, and the curve or silhouette it came from. [`plot`]
+//! draws each as SVG.
 //!
 //! What the runner writes and which channels each experiment adds: runner/MCAP.md and the
 //! channel contract in each reducer's documentation. The reference study and its tests:
@@ -31,6 +33,7 @@ mod repose;
 mod series;
 mod shear;
 mod silhouette;
+mod tilt;
 mod ucs;
 
 pub use cloud::ParticleCloud;
@@ -51,4 +54,5 @@ pub use shear::{
     DIRECT_SHEAR, ShearAnalysis, ShearOptions, ShearResult, ShearSpecimen, analyse_shear, shear,
 };
 pub use silhouette::{SilhouetteMethod, View, silhouette};
+pub use tilt::{TILT, TiltAnalysis, TiltResult, analyse_tilt, tilt};
 pub use ucs::{Failure, UCS, UcsAnalysis, UcsOptions, UcsResult, UcsSpecimen, analyse_ucs, ucs};

@@ -20,10 +20,11 @@ pub(super) fn check_single_test(args: &CalibrateArgs) -> Result<()> {
             args.test
         );
     }
-    if !["repose", "direct_shear", "ucs"].contains(&args.test.as_str()) {
+    if !crate::study::measurements::TESTS.contains(&args.test.as_str()) {
         bail!(
-            "--test {}: unknown, allowed repose, direct_shear, ucs",
-            args.test
+            "--test {}: unknown, allowed {}",
+            args.test,
+            crate::study::measurements::TESTS.join(", ")
         );
     }
     check_counts(args)

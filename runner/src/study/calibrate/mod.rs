@@ -61,7 +61,7 @@ pub struct CalibrateArgs {
     /// Measurements (CSV), e.g. data/li2022/measurements.csv.
     #[arg(long)]
     pub data: PathBuf,
-    /// The test whose measurements to fit: repose, direct_shear or ucs (with `--joint`,
+    /// The test whose measurements to fit: repose, direct_shear, ucs or tilt (with `--joint`,
     /// several, comma-separated: `repose,ucs`).
     #[arg(long)]
     pub test: String,

@@ -233,11 +233,9 @@ pub(super) fn run_plan(
     args: &CalibrateArgs,
     stop: &Arc<AtomicBool>,
 ) -> Result<Vec<Option<f64>>> {
-    let observable = match args.test.as_str() {
-        "repose" => "repose_angle_deg",
-        "direct_shear" => "peak_shear_force_n",
-        _ => "ucs_kpa",
-    };
+    let observable = crate::study::measurements::observable_of(&args.test)
+        .map(|(o, _)| o)
+        .ok_or_else(|| anyhow::anyhow!("--test {}: not a test", args.test))?;
     run_and_read(plan, dir, args, stop, |_| Some(observable))
 }
 

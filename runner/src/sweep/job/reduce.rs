@@ -40,6 +40,14 @@ pub fn reduce_run(path: &Path, kind: &str) -> serde_json::Value {
                     "max_inertial_number": r.analysis.max_inertial_number,
                 })
             }
+            "tilt" => {
+                let r = reduce::tilt(&run)?;
+                std::fs::write(path.with_file_name("tilt.svg"), reduce::plot::tilt_svg(&r)?)?;
+                serde_json::json!({
+                    "slide_angle_deg": r.analysis.slide_angle_deg,
+                    "static_friction": r.analysis.static_friction,
+                })
+            }
             other => serde_json::json!({ "error": format!("no reducer for `{other}`") }),
         })
     })();

@@ -9,11 +9,13 @@
 mod mohr_coulomb;
 mod repose;
 mod shear;
+mod tilt;
 mod ucs;
 
 pub use mohr_coulomb::mohr_coulomb_svg;
 pub use repose::repose_svg;
 pub use shear::shear_svg;
+pub use tilt::tilt_svg;
 pub use ucs::ucs_svg;
 
 use super::error::ReduceError;

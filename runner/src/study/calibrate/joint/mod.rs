@@ -173,7 +173,8 @@ impl<'a> Joint<'a> {
         let tests: Vec<&str> = args.test.split(',').map(str::trim).collect();
         if let Some(t) = tests.iter().find(|t| !TESTS.contains(t)) {
             bail!(
-                "--test {t}: unknown, allowed repose, direct_shear, ucs (comma-separated with --joint)"
+                "--test {t}: unknown, allowed {} (comma-separated with --joint)",
+                TESTS.join(", ")
             );
         }
         let (params, model_path, model) = load_params(args)?;
