@@ -119,9 +119,7 @@ pub fn build(c: &Common, p: &ShearParams) -> Result<Built> {
         specimen::particles_for(c, &mix, area * p.height, p.packing, loads, p.bonded)?;
     let parts = c.model.scene_parts(c.at(), true)?;
     let r = 0.5 * p.box_diameter;
-    // Loose particles need about twice the specimen's height; the platen starts above that.
-    let z_fill = 2.4 * p.height / (p.packing / 0.55);
-    let z_top = z_fill + 2.0 * d;
+    let (z_fill, z_top) = specimen::mould_heights(p.height, p.packing, d);
     let duration = 4.0 * p.max_phase_time + p.shear_displacement / speed + 0.5;
     let simulation = specimen::simulation(
         c,

@@ -120,8 +120,7 @@ pub fn build(c: &Common, p: &TiltParams) -> Result<Built> {
     let volume = area * p.sample_height;
     let (steps, count) = specimen::particles_for(c, &mix, volume, p.packing, loads, true)?;
     let parts = c.model.scene_parts(c.at(), true)?;
-    let z_fill = 2.4 * p.sample_height / (p.packing / 0.55);
-    let z_top = z_fill + 2.0 * d;
+    let (z_fill, z_top) = specimen::mould_heights(p.sample_height, p.packing, d);
     let tilt_time =
         (p.max_angle - p.start_angle) / p.tilt_rate + p.start_angle / (4.0 * p.tilt_rate);
     let duration = 5.0 * p.max_phase_time + tilt_time + 0.5;

@@ -109,8 +109,7 @@ pub fn build(c: &Common, p: &UcsParams) -> Result<Built> {
     };
     let (steps, count) = specimen::particles_for(c, &mix, area * p.height, p.packing, loads, true)?;
     let parts = c.model.scene_parts(c.at(), true)?;
-    let z_fill = 2.4 * p.height / (p.packing / 0.55);
-    let z_top = z_fill + 2.0 * d;
+    let (z_fill, z_top) = specimen::mould_heights(p.height, p.packing, d);
     let duration = 4.0 * p.max_phase_time + p.max_strain * p.height / speed + 0.5;
     let simulation = specimen::simulation(
         c,
