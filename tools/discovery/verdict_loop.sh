@@ -42,7 +42,9 @@ read -r first names <<< "$(verdict_of "$out/2-diagnose")"
 line="$effect $strength seed $seed: $first $names"
 final=$first final_names=$names
 if [ "$first" = ambiguous ]; then
-  "$tilth" next --diagnosis "$out/2-diagnose" --menu "$menu" --out "$out/3-next" "${lab[@]}" > /dev/null
+  # Scored as synth measures: the mean of R_DATA specimens.
+  "$tilth" next --diagnosis "$out/2-diagnose" --menu "$menu" --out "$out/3-next" \
+    --specimens "$R_DATA" "${lab[@]}" > /dev/null
   suggestion=$(tail -n +2 "$out/3-next/conditions.csv" | head -1 | cut -d, -f1-4)
   "$tilth" synth --truth "${TRUTH_MODEL:-$model}" "${truth[@]}" --conditions "$out/3-next/conditions.csv" \
     --noise "$noise_all" --replicates "$R_DATA" --seed "$seed" --out "$out/3-next/measured.csv" "${lab[@]}"

@@ -462,7 +462,7 @@ fn next_ranks_a_menu_and_writes_the_best_as_conditions() {
     let (dir, model_path, data) = absorbed_case("diagnose-next", "0.025");
     let out_dir = dir.join("out");
     let out = run_diagnose((&model_path, &data, &out_dir), "capillary,twisting", &[]);
-    diagnosis(&out, &out_dir);
+    let d = diagnosis(&out, &out_dir);
     let menu = dir.join("menu.csv");
     std::fs::write(&menu, "test,moisture_pct\nrepose,3\nrepose,9\n").unwrap();
     let next_dir = dir.join("next");
@@ -497,11 +497,37 @@ fn next_ranks_a_menu_and_writes_the_best_as_conditions() {
         serde_json::from_slice(&std::fs::read(next_dir.join("next.json")).unwrap()).unwrap();
     let options = json["options"].as_array().unwrap();
     assert_eq!(options.len(), 2, "{json}");
-    let sep: Vec<f64> = options
-        .iter()
-        .map(|o| o["separation"].as_f64().unwrap())
+    // Ranked by the expected power, a probability itself. Box and Hill's weights without a
+    // refit: P_k proportional to exp(T_k / 2), T_k the rival's score statistic (the linear
+    // drop in chi^2 its fit would bring).
+    let weights: Vec<f64> = (json["weights"].as_array().unwrap().iter())
+        .map(|w| w.as_f64().unwrap())
         .collect();
-    assert!(sep[0] >= sep[1], "{sep:?}");
+    let statistic = |name: &str| {
+        (d["candidates"].as_array().unwrap().iter())
+            .find(|c| c["name"] == name)
+            .unwrap()["statistic"]
+            .as_f64()
+            .unwrap()
+    };
+    let odds = ((statistic("capillary") - statistic("twisting")) / 2.0).exp();
+    assert!(
+        (weights[0] / weights[1] - odds).abs() < 1e-9 * odds.max(1.0),
+        "{weights:?} against odds {odds}"
+    );
+    assert!(
+        (weights.iter().sum::<f64>() - 1.0).abs() < 1e-9,
+        "{weights:?}"
+    );
+    let expected: Vec<f64> = options
+        .iter()
+        .map(|o| o["expected_power"].as_f64().unwrap())
+        .collect();
+    assert!(expected[0] >= expected[1], "{expected:?}");
+    assert!(
+        expected.iter().all(|e| (0.0..=1.0).contains(e)),
+        "{expected:?}"
+    );
     let funnel = [
         "repose_angle_deg",
         "heap_cone_angle_deg",

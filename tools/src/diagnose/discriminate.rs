@@ -163,6 +163,50 @@ pub fn fitted_separations(f: &Fitted, alpha: f64) -> Vec<Separation> {
     out
 }
 
+/// The rivals' weights on the data so far, the posterior probabilities of Box and Hill
+/// (1967): with equal priors and each rival one strength beyond the free parameters (so no
+/// rival pays more for its parameters than another),
+///
+///   P_k = exp(-chi2_k / 2) / sum_j exp(-chi2_j / 2),
+///
+/// chi2_k the misfit of rival k fitted. A rival whose misfit is unknown (its fit failed)
+/// weighs as much as the best: no rival loses weight for want of a fit. All unknown: equal.
+pub fn weights(chi2: &[Option<f64>]) -> Vec<f64> {
+    let best = chi2.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+    if !best.is_finite() {
+        return vec![1.0 / chi2.len() as f64; chi2.len()];
+    }
+    let raw: Vec<f64> = (chi2.iter())
+        .map(|c| (-(c.unwrap_or(best) - best) / 2.0).exp())
+        .collect();
+    let total: f64 = raw.iter().sum();
+    raw.iter().map(|w| w / total).collect()
+}
+
+/// The Bayesian discrimination criterion in power form: with rival a the truth with
+/// probability P_a ([`weights`]), the chance that the encompassing tests on the new data
+/// reject every wrong rival, bounded above by the hardest of them,
+///
+///   E = sum_a P_a min_{b != a} power(a -> b).
+///
+/// Unlike the max-min of T-optimality, a pair of rivals the data already make unlikely
+/// does not decide the choice (Box and Hill 1967; Hill, Hunter and Wichern 1968,
+/// Technometrics 10:145, weigh the pairs so).
+pub fn expected_power(pairs: &[Separation], names: &[String], weights: &[f64]) -> f64 {
+    assert_eq!(names.len(), weights.len(), "one weight per rival");
+    names
+        .iter()
+        .zip(weights)
+        .map(|(a, w)| {
+            let hardest = (pairs.iter())
+                .filter(|p| &p.truth == a)
+                .map(|p| p.power)
+                .fold(1.0, f64::min);
+            w * hardest
+        })
+        .sum()
+}
+
 /// P(|Z + sqrt(lambda)| > z), Z standard normal: a 1-df chi^2 test's power.
 fn power(lambda: f64, z: f64) -> f64 {
     let n = Normal::new(0.0, 1.0).expect("standard normal");
@@ -266,6 +310,43 @@ mod tests {
             assert_eq!(p.noise, 0.0);
             assert!((p.power - power(want, 2.5758293035489004)).abs() < 1e-9);
         }
+    }
+
+    #[test]
+    fn weights_are_the_posterior_and_a_failed_fit_weighs_as_the_best() {
+        // chi2 10 and 12: odds exp(1) : 1.
+        let w = weights(&[Some(10.0), Some(12.0)]);
+        assert!((w[0] / w[1] - 1f64.exp()).abs() < 1e-12, "{w:?}");
+        assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        let w = weights(&[Some(10.0), None, Some(30.0)]);
+        assert!((w[0] - w[1]).abs() < 1e-12 && w[2] < 1e-4 * w[0], "{w:?}");
+        assert_eq!(weights(&[None, None]), vec![0.5, 0.5]);
+    }
+
+    #[test]
+    fn expected_power_weighs_each_truth_by_its_hardest_rival() {
+        let sep = |truth: &str, rival: &str, power: f64| Separation {
+            truth: truth.into(),
+            rival: rival.into(),
+            noncentrality: 0.0,
+            noise: 0.0,
+            power,
+        };
+        let names: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
+        let pairs = vec![
+            sep("a", "b", 0.9),
+            sep("a", "c", 0.8),
+            sep("b", "a", 0.5),
+            sep("b", "c", 0.1),
+            sep("c", "a", 0.7),
+            sep("c", "b", 0.2),
+        ];
+        // 0.6 * 0.8 + 0.3 * 0.1 + 0.1 * 0.2.
+        let e = expected_power(&pairs, &names, &[0.6, 0.3, 0.1]);
+        assert!((e - 0.53).abs() < 1e-12, "{e}");
+        // All weight on a: only a's pairs count.
+        let e = expected_power(&pairs, &names, &[1.0, 0.0, 0.0]);
+        assert!((e - 0.8).abs() < 1e-12, "{e}");
     }
 
     #[test]

@@ -49,6 +49,9 @@ pub struct RefitIn {
 #[derive(Deserialize)]
 pub struct NullIn {
     pub dir: PathBuf,
+    /// Its misfit, sum of z^2 over the rows.
+    #[serde(default)]
+    pub chi2: Option<f64>,
 }
 
 /// One contender's fit: its name, fitted strength and directory (with `model.toml`).
@@ -58,6 +61,9 @@ pub struct ContenderIn {
     /// None when its fit failed.
     pub strength: Option<f64>,
     pub dir: PathBuf,
+    /// Its misfit at the fitted strength; None when the fit failed.
+    #[serde(default)]
+    pub chi2: Option<f64>,
 }
 
 /// A held parameter the diagnosis probed, with its step as measured (lengthened or not).
@@ -74,6 +80,9 @@ pub struct Probe {
 pub struct CandidateIn {
     pub name: String,
     pub strength: f64,
+    /// Its score statistic against no effect: the drop in chi^2 it would bring, linearised.
+    #[serde(default)]
+    pub statistic: f64,
 }
 
 /// The standardised columns, one number per entry of `rows`.

@@ -39,6 +39,25 @@ pub(super) fn fitted_rivals(d: &DiagnosisFile, rivals: &[String]) -> Option<Vec<
         .collect()
 }
 
+/// Each rival's misfit on the diagnosed rows, for its weight
+/// ([`tilth_tools::diagnose::discriminate::weights`]): its refit's chi^2, None where the fit
+/// failed; without a refit (`--no-refit`), the linear one, the free parameters' misfit less
+/// the rival's score statistic (the misfit itself cancels in the weights).
+pub(super) fn misfits(d: &DiagnosisFile, rivals: &[String]) -> Vec<Option<f64>> {
+    rivals
+        .iter()
+        .map(|n| match &d.refit {
+            Some(refit) if n == FREE => refit.free.chi2,
+            Some(refit) => (refit.contenders.iter())
+                .find(|c| &c.name == n)
+                .and_then(|c| c.strength.and(c.chi2)),
+            None => (d.candidates.iter())
+                .find(|c| &c.name == n)
+                .map(|c| -c.statistic),
+        })
+        .collect()
+}
+
 /// Every menu measurement scored with the rivals' fitted models.
 pub(super) fn fitted_options(
     args: &NextArgs,

@@ -1,17 +1,21 @@
 //! `tilth next --diagnosis DIR --menu MENU.csv --out NEXT`: which measurement would tell
-//! apart the candidates an ambiguous diagnosis could not, ranked by the T-optimal criterion
-//! of [`tilth_tools::diagnose::discriminate`].
+//! apart the candidates an ambiguous diagnosis could not, ranked by the discrimination
+//! criteria of [`tilth_tools::diagnose::discriminate`].
 //!
 //! Every measurement the lab could take (a row of `--menu`: a test and its conditions; every
 //! observable of the test unless the file names one per row) is simulated with the
 //! diagnosis's own variants and seeds (the model, each free parameter raised by its step,
 //! each rival switched on at its step), so the new rows' columns are measured as the old
 //! rows' were. Each measurement is added to the diagnosed rows in turn, and the pair of
-//! rivals hardest to tell apart on the result sets its score: the noncentrality of the
+//! rivals hardest to tell apart on the result sets its separation: the noncentrality of the
 //! encompassing test that would reject the wrong one, less its finite-difference noise, and
-//! that test's power at the diagnosis's alpha. A new row is standardised by
-//! sqrt(lab^2 / specimens + scatter^2 / R): the lab's noise (`--noise`, as `tilth synth`
-//! takes it; the runs' own scatter when not given) and the model's runs.
+//! that test's power at the diagnosis's alpha. The ranking is by the expected power of
+//! [`tilth_tools::diagnose::discriminate::expected_power`]: each rival's chance of being
+//! the truth, from its fit's misfit (Box and Hill 1967), times the power of the test against
+//! its hardest rival, so a pair the data already make unlikely does not decide the choice
+//! (`--criterion maximin` ranks by the hardest pair alone, the T-optimal design). A new row
+//! is standardised by sqrt(lab^2 / specimens + scatter^2 / R): the lab's noise (`--noise`,
+//! as `tilth synth` takes it; the runs' own scatter when not given) and the model's runs.
 //!
 //! Writes `NEXT/next.json` (every measurement, best first, with every pair's separation),
 //! `NEXT/next.md` and `NEXT/conditions.csv`, the `--top` best as a conditions file for the
@@ -30,7 +34,9 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use tilth_tools::compare::mean_sd;
-use tilth_tools::diagnose::discriminate::{Rows, Separation, separations, worst};
+use tilth_tools::diagnose::discriminate::{
+    Rows, Separation, expected_power, separations, weights, worst,
+};
 use tilth_tools::diagnose::verdict::Kind;
 
 mod fitted;
@@ -62,11 +68,25 @@ pub struct NextArgs {
     /// How many of the best measurements go into conditions.csv.
     #[arg(long, default_value_t = 1)]
     pub top: usize,
+    /// How measurements are ranked: by the expected power over the rivals weighted by their
+    /// fits, or by the hardest pair alone.
+    #[arg(long, value_enum, default_value_t = Criterion::ExpectedPower)]
+    pub criterion: Criterion,
     #[command(flatten)]
     pub lab: LabRunArgs,
 }
 
 use crate::study::diagnose::file::DiagnosisFile as Diagnosis;
+
+/// The ranking of `tilth next`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Criterion {
+    /// sum over rivals a of P(a) x the power against a's hardest rival (Box and Hill 1967).
+    ExpectedPower,
+    /// The hardest pair's separation (T-optimal, Atkinson and Fedorov 1975).
+    Maximin,
+}
 
 /// One measurement the lab could take, scored.
 #[derive(Debug, Serialize)]
@@ -78,6 +98,8 @@ pub struct Suggestion {
     pub separation: f64,
     /// That pair's test power at the diagnosis's alpha.
     pub power: f64,
+    /// sum over rivals a of weight(a) x the power against a's hardest rival.
+    pub expected_power: f64,
     pub pairs: Vec<Separation>,
     /// DEM runs a diagnosis with it added costs for it: variants x replicates.
     pub runs: usize,
@@ -130,7 +152,15 @@ fn next_into(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
                 .join("; ")
         );
     }
-    options.sort_by(|a, b| b.separation.total_cmp(&a.separation));
+    let weights = weights(&fitted::misfits(&d, &rivals));
+    for o in &mut options {
+        o.expected_power = expected_power(&o.pairs, &rivals, &weights);
+    }
+    options.sort_by(|a, b| match args.criterion {
+        Criterion::ExpectedPower => (b.expected_power.total_cmp(&a.expected_power))
+            .then(b.separation.total_cmp(&a.separation)),
+        Criterion::Maximin => b.separation.total_cmp(&a.separation),
+    });
     std::fs::create_dir_all(&args.out)?;
     write_conditions(
         &args.out.join("conditions.csv"),
@@ -143,6 +173,8 @@ fn next_into(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
         "mode": mode,
         "rivals": rivals,
         "strengths": strengths,
+        "weights": weights,
+        "criterion": args.criterion,
         "alpha": d.alpha,
         "specimens": args.specimens,
         "noise": args.noise,
@@ -156,7 +188,7 @@ fn next_into(args: &NextArgs, out: &mut dyn Write) -> Result<()> {
     )?;
     let md = report(
         args,
-        (&rivals, &strengths, mode),
+        (&rivals, &strengths, &weights, mode),
         now.as_ref(),
         (&options, &unscored),
     );
@@ -365,6 +397,7 @@ impl Suggestion {
             observables,
             separation: w.noncentrality - w.noise,
             power: w.power,
+            expected_power: 0.0,
             pairs,
             runs,
         }

@@ -1,6 +1,6 @@
 //! `next.md` and `conditions.csv`: the ranking in words and the best as a conditions file.
 
-use super::{NextArgs, Suggestion, Unscored};
+use super::{Criterion, NextArgs, Suggestion, Unscored};
 use anyhow::Result;
 use std::path::Path;
 use tilth_tools::diagnose::discriminate::{Separation, worst};
@@ -58,7 +58,7 @@ fn named(rivals: &[String], strengths: &[f64]) -> String {
 
 pub(super) fn report(
     args: &NextArgs,
-    (rivals, strengths, mode): (&[String], &[f64], &str),
+    (rivals, strengths, weights, mode): (&[String], &[f64], &[f64], &str),
     now: Option<&Separation>,
     (options, unscored): (&[Suggestion], &[Unscored]),
 ) -> String {
@@ -84,6 +84,20 @@ pub(super) fn report(
             args.noise.clone()
         }
     );
+    md += &match args.criterion {
+        Criterion::ExpectedPower => format!(
+            "Ranked by the expected power: each rival's weight, its chance of being the truth on the data so far (from its fit's misfit, Box and Hill 1967; {}), times the power against its hardest rival, summed.\n\n",
+            rivals
+                .iter()
+                .zip(weights)
+                .map(|(n, w)| format!("{n} {w:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        Criterion::Maximin => {
+            "Ranked by the hardest pair's separation (T-optimal).\n\n".to_string()
+        }
+    };
     if let Some(w) = now {
         md += &format!(
             "Now: {} against {} is the hardest pair, separation {:.2} (power {:.2}).\n\n",
@@ -93,15 +107,16 @@ pub(super) fn report(
             w.power
         );
     }
-    md += "| rank | test | conditions | readings | separation | power | hardest pair | runs |\n|---|---|---|---|---|---|---|---|\n";
+    md += "| rank | test | conditions | readings | expected power | separation | power | hardest pair | runs |\n|---|---|---|---|---|---|---|---|---|\n";
     for (k, o) in options.iter().enumerate() {
         let w = worst(&o.pairs).expect("pairs");
         md += &format!(
-            "| {} | {} | {} | {} | {:.2} | {:.2} | {} vs {} | {} |\n",
+            "| {} | {} | {} | {} | {:.3} | {:.2} | {:.2} | {} vs {} | {} |\n",
             k + 1,
             o.test,
             conditions_text(&o.conditions),
             o.observables.len(),
+            o.expected_power,
             o.separation,
             o.power,
             w.truth,
@@ -115,7 +130,11 @@ pub(super) fn report(
         best.test,
         conditions_text(&best.conditions)
     );
-    if best.power < 0.5 {
+    let chance = match args.criterion {
+        Criterion::ExpectedPower => best.expected_power,
+        Criterion::Maximin => best.power,
+    };
+    if chance < 0.5 {
         md += " Even this one is more likely than not to leave them ambiguous: measure it with more specimens, or several of the list.";
     }
     md += "\n";
