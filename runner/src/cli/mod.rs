@@ -45,7 +45,8 @@ pub enum Command {
     /// score test per candidate after what the free parameters absorb.
     Diagnose(diagnose::DiagnoseArgs),
     /// Which measurement would tell apart the candidates a diagnosis could not: ranks a
-    /// menu of tests and conditions by the T-optimal criterion; writes conditions.csv.
+    /// menu of tests and conditions by how likely each is to settle the case (Box and
+    /// Hill); writes conditions.csv.
     Next(next::NextArgs),
     /// Every compare run of a project as a history: errors per model version, the plots
     /// side by side, one offline HTML page.
