@@ -47,11 +47,12 @@ pub(super) fn conditions_text(conditions: &std::collections::BTreeMap<String, f6
         .join(", ")
 }
 
-fn named(rivals: &[String], strengths: &[f64]) -> String {
+/// "NAME VALUE, ..." with `digits` decimals: each rival's strength or weight.
+fn named(rivals: &[String], values: &[f64], digits: usize) -> String {
     rivals
         .iter()
-        .zip(strengths)
-        .map(|(n, s)| format!("{n} {s:.4}"))
+        .zip(values)
+        .map(|(n, v)| format!("{n} {v:.digits$}"))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -68,12 +69,12 @@ pub(super) fn report(
         if mode == "fitted" {
             format!(
                 "Each rival as the diagnosis fitted it on simulations ({}). The score of a measurement is the noncentrality of the test that would reject the wrong rival on it alone, sum (mu_a - mu_b)^2 / (lab^2 + s_b^2 / R) over its readings, for the pair hardest to tell apart, less what the runs' scatter brings to it; the rival is not refitted to the new readings, so this is an upper bound.",
-                named(rivals, strengths)
+                named(rivals, strengths, 4)
             )
         } else {
             format!(
                 "Each rival at its estimated strength ({}). The score of a measurement is the noncentrality of the test that would reject the wrong rival, for the pair hardest to tell apart once it is added, less what the finite differences' noise brings.",
-                named(rivals, strengths)
+                named(rivals, strengths, 4)
             )
         },
         args.specimens,
@@ -87,12 +88,7 @@ pub(super) fn report(
     md += &match args.criterion {
         Criterion::ExpectedPower => format!(
             "Ranked by the expected power: each rival's weight, its chance of being the truth on the data so far (from its fit's misfit, Box and Hill 1967; {}), times the power against its hardest rival, summed.\n\n",
-            rivals
-                .iter()
-                .zip(weights)
-                .map(|(n, w)| format!("{n} {w:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            named(rivals, weights, 3)
         ),
         Criterion::Maximin => {
             "Ranked by the hardest pair's separation (T-optimal).\n\n".to_string()
