@@ -668,7 +668,7 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
         .as_array()
         .expect("refit: the linear verdict has contenders");
     assert!(!fits.is_empty());
-    let (mut chosen, mut kept) = (vec![], vec![]);
+    let (mut chosen, mut kept, mut gaps) = (vec![], vec![], vec![]);
     for f in fits {
         let name = f["name"].as_str().unwrap();
         let fit = read(f["dir"].as_str().unwrap());
@@ -694,8 +694,7 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
             "{name}: {f}"
         );
         assert_eq!(f["within_noise"].as_bool(), Some(p >= 0.01), "{name}");
-        // The rows' standardised residuals that Vuong's test compares: chi^2 is their sum
-        // of squares.
+        // The rows' standardised residuals: chi^2 is their sum of squares.
         let z: Vec<f64> = f["z"]
             .as_array()
             .unwrap()
@@ -708,10 +707,46 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
         assert_eq!(f["needed"].as_bool(), Some(needed), "{name}");
         let excluded = f["p_worse"].as_f64().is_some_and(|p| p < 0.01);
         assert_eq!(f["excluded"].as_bool(), Some(excluded), "{name}");
+        // What the fit could still gain, from its history: the last accepted step's
+        // predicted gain, or, out of iterations, the chi^2 that step removed if more.
+        let accepted: Vec<&serde_json::Value> = fit["history"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["accepted"] == true)
+            .collect();
+        let last = accepted.last().unwrap();
+        let mut gain = last["predicted_gain"].as_f64().unwrap_or(0.0);
+        if fit["stopped"] == "iterations" && accepted.len() > 1 {
+            let before = accepted[accepted.len() - 2]["chi2"].as_f64().unwrap();
+            gain = gain.max(before - last["chi2"].as_f64().unwrap());
+        }
+        assert_eq!(f["unfinished_gain"].as_f64(), Some(gain.max(0.0)), "{name}");
         if needed {
+            gaps.push((fit["chi2_scores"].as_f64().unwrap(), gain.max(0.0), f));
             chosen.push((chi2, name.to_string(), fit["estimate"][1].as_f64().unwrap()));
             kept.push(!excluded);
         }
+    }
+    // Each needed rival against the best needed one: P(gap) <= exp(-gap/2) if it were the
+    // truth, the gap in normal scores less what its fit could still gain; Holm over them.
+    if let Some(best) = (0..chosen.len()).min_by(|&a, &b| chosen[a].0.total_cmp(&chosen[b].0)) {
+        let others: Vec<usize> = (0..gaps.len()).filter(|&k| k != best).collect();
+        let raw: Vec<f64> = (others.iter())
+            .map(|&k| {
+                let g = gaps[k].0 - gaps[best].0 - gaps[k].1;
+                if g > 0.0 { (-g / 2.0).exp() } else { 1.0 }
+            })
+            .collect();
+        let mut order: Vec<usize> = (0..raw.len()).collect();
+        order.sort_by(|&a, &b| raw[a].total_cmp(&raw[b]));
+        let mut running = 0.0f64;
+        for (rank, &i) in order.iter().enumerate() {
+            running = running.max(((raw.len() - rank) as f64 * raw[i]).min(1.0));
+            let got = gaps[others[i]].2["p_worse"].as_f64().unwrap();
+            assert!((got - running).abs() < 1e-12, "{got} {running}");
+        }
+        assert!(gaps[best].2["p_worse"].is_null());
     }
     // The best needed contender, if within the noise, with every needed one not excluded.
     let mut order: Vec<usize> = (0..chosen.len()).collect();

@@ -30,6 +30,7 @@ use tilth_tools::diagnose::verdict::Verdict;
 use tilth_tools::diagnose::{Score, score_tests};
 
 mod asked;
+mod exclude;
 pub mod file;
 mod fit_first;
 mod refit;
@@ -95,7 +96,7 @@ pub struct DiagnoseArgs {
     /// contender with them (a candidate or probe the linear verdict kept or scored at a
     /// corrected p under 0.1) are fitted on simulations (`tilth fit`, into DIR/refit/), and
     /// the verdict is the fits': the best needed contender within the noise is named when
-    /// its rivals fit worse row by row, ambiguous with those that do not (docs/discovery.md,
+    /// its rivals' fits are worse beyond the noise, ambiguous with those that are not (docs/discovery.md,
     /// "Refitting the contenders"). That costs one fit per contender.
     #[arg(long)]
     pub no_refit: bool,

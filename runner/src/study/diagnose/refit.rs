@@ -15,8 +15,9 @@
 //! - within the noise: P(chi^2_dof > Q_C) >= alpha, the verdict's misfit test, Q_C the sum
 //!   of the rows' normal scores squared (`tilth fit`'s `chi2_scores`: it allows for standard
 //!   errors estimated from a few runs, [`tilth_tools::compare::welch`]);
-//! - excluded: its fit is worse than the best needed contender's row by row (Vuong's test,
-//!   Holm-corrected over the others).
+//! - excluded: a gap to the best needed contender's fit that it would leave as the truth
+//!   with probability under alpha (`exclude.rs`: the known noise, what an unfinished fit
+//!   could still gain, Holm-corrected over the others).
 //!
 //! The verdict: the best needed contender, if within the noise, is named with its fitted
 //! strength when every other needed one is excluded, and is `ambiguous` with those that are
@@ -58,8 +59,13 @@ pub struct Contender {
     pub p_needed: f64,
     pub needed: bool,
     pub within_noise: bool,
-    /// Against the best needed contender: Vuong's one-sided p that it fits no worse,
-    /// Holm-corrected over the others (None for the best itself or one not needed).
+    /// What its fit could still gain: the predicted chi^2 gain of the next step at its best
+    /// setting or, when it stopped for want of iterations, its last step's gain if larger
+    /// ([`super::exclude::unfinished_gain`]).
+    pub unfinished_gain: f64,
+    /// Against the best needed contender: the bound on the chance of a gap as large if it
+    /// were the truth ([`tilth_tools::diagnose::nonnested::gap_p`]), Holm-corrected over the
+    /// others (None for the best itself or one not needed).
     pub p_worse: Option<f64>,
     /// Its fit is worse than the best's beyond doubt (p_worse < alpha).
     pub excluded: bool,
@@ -94,7 +100,7 @@ pub struct Refits {
 
 impl Contender {
     /// A contender whose fit failed with `why`.
-    fn failed(name: &str, param: String, dir: &Path, why: String) -> Contender {
+    pub(super) fn failed(name: &str, param: String, dir: &Path, why: String) -> Contender {
         Contender {
             name: name.to_string(),
             param,
@@ -108,6 +114,7 @@ impl Contender {
             p_needed: f64::NAN,
             needed: false,
             within_noise: false,
+            unfinished_gain: 0.0,
             p_worse: None,
             excluded: false,
             z: vec![],
@@ -115,6 +122,59 @@ impl Contender {
             failed: Some(why),
         }
     }
+}
+
+impl Contender {
+    /// A contender fitted into `dir` (`f`), beside the free parameters' chi^2.
+    fn fitted(
+        name: &str,
+        param: String,
+        dir: &Path,
+        f: Fitted,
+        free_chi2: f64,
+        alpha: f64,
+    ) -> Self {
+        let p_value = chi2_sf(f.chi2_scores, f.dof);
+        Contender {
+            name: name.to_string(),
+            param,
+            strength: f.estimate,
+            standard_error: f.standard_error,
+            chi2: f.chi2,
+            chi2_scores: f.chi2_scores,
+            dof: f.dof,
+            p_value,
+            chi2_drop: free_chi2 - f.chi2,
+            p_needed: f64::NAN,
+            needed: false,
+            within_noise: p_value >= alpha,
+            unfinished_gain: f.unfinished_gain,
+            p_worse: None,
+            excluded: false,
+            z: f.z,
+            dir: dir.display().to_string(),
+            failed: None,
+        }
+    }
+}
+
+/// Needed (the chi^2 drop against chi^2(1), Holm over the contenders whose fits were made),
+/// then excluded beside the best ([`super::exclude::exclude_worse`]).
+fn judge(fits: &mut [Contender], alpha: f64) {
+    let raw: Vec<f64> = fits
+        .iter()
+        .filter(|c| c.failed.is_none())
+        .map(|c| chi2_sf(c.chi2_drop.max(0.0), 1.0))
+        .collect();
+    for (c, p) in fits
+        .iter_mut()
+        .filter(|c| c.failed.is_none())
+        .zip(tilth_tools::diagnose::holm_adjust(&raw))
+    {
+        c.p_needed = p;
+        c.needed = c.chi2_drop > 0.0 && p < alpha;
+    }
+    super::exclude::exclude_worse(fits, alpha);
 }
 
 /// The contenders of a linear diagnosis, best first.
@@ -159,15 +219,16 @@ fn chi2_sf(x: f64, dof: f64) -> f64 {
     ChiSquared::new(dof.max(1.0)).map_or(f64::NAN, |d| d.sf(x))
 }
 
-/// What one fit left: chi^2 (and its normal scores' sum, the misfit test's), dof, and the
-/// last parameter's estimate and standard error.
-struct Fitted {
-    chi2: f64,
-    chi2_scores: f64,
-    dof: f64,
+/// What one fit left: chi^2 (and its normal scores' sum, the misfit test's), dof, the
+/// last parameter's estimate and standard error, and what it could still gain.
+pub(super) struct Fitted {
+    pub(super) chi2: f64,
+    pub(super) chi2_scores: f64,
+    pub(super) dof: f64,
     estimate: f64,
     standard_error: Option<f64>,
     z: Vec<f64>,
+    unfinished_gain: f64,
 }
 
 fn read_fit(dir: &Path) -> Result<Fitted> {
@@ -190,6 +251,7 @@ fn read_fit(dir: &Path) -> Result<Fitted> {
         z: (j["z"].as_array().into_iter().flatten())
             .filter_map(|v| v.as_f64())
             .collect(),
+        unfinished_gain: super::exclude::unfinished_gain(&j),
     })
 }
 
@@ -216,36 +278,6 @@ fn fit_into(
     };
     crate::study::fit::fit(&fit)?;
     read_fit(dir)
-}
-
-/// Each needed contender against the best needed one (the least chi^2), row by row
-/// ([`tilth_tools::diagnose::nonnested::vuong`]), Holm-corrected over them: `excluded` when
-/// its fit is worse beyond doubt. A chi^2 lower by a few rows' luck does not name the best.
-fn exclude_worse(fits: &mut [Contender], alpha: f64) {
-    use tilth_tools::diagnose::nonnested::{vuong, vuong_p};
-    let Some(best) = (0..fits.len())
-        .filter(|&k| fits[k].needed)
-        .min_by(|&a, &b| fits[a].chi2.total_cmp(&fits[b].chi2))
-    else {
-        return;
-    };
-    let others: Vec<usize> = (0..fits.len())
-        .filter(|&k| k != best && fits[k].needed)
-        .collect();
-    let raw: Vec<f64> = others
-        .iter()
-        .map(|&k| {
-            if fits[k].z.len() == fits[best].z.len() && !fits[k].z.is_empty() {
-                vuong_p(vuong(&fits[best].z, &fits[k].z))
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    for (&k, p) in others.iter().zip(tilth_tools::diagnose::holm_adjust(&raw)) {
-        fits[k].p_worse = Some(p);
-        fits[k].excluded = p < alpha;
-    }
 }
 
 /// The verdict the refits give, from the linear one (`encompassing` kept); `score` gives a
@@ -378,42 +410,34 @@ pub(super) fn refit(
                 continue;
             }
         };
-        let p_value = chi2_sf(f.chi2_scores, f.dof);
-        fits.push(Contender {
-            name: d.score.name.clone(),
+        fits.push(Contender::fitted(
+            &d.score.name,
             param,
-            strength: f.estimate,
-            standard_error: f.standard_error,
-            chi2: f.chi2,
-            chi2_scores: f.chi2_scores,
-            dof: f.dof,
-            p_value,
-            chi2_drop: free.chi2 - f.chi2,
-            p_needed: f64::NAN,
-            needed: false,
-            within_noise: p_value >= args.alpha,
-            p_worse: None,
-            excluded: false,
-            z: f.z,
-            dir: dir.display().to_string(),
-            failed: None,
-        });
+            &dir,
+            f,
+            free.chi2,
+            args.alpha,
+        ));
     }
-    // The Holm family is the contenders whose fits were made.
-    let raw: Vec<f64> = fits
-        .iter()
-        .filter(|c| c.failed.is_none())
-        .map(|c| chi2_sf(c.chi2_drop.max(0.0), 1.0))
-        .collect();
-    for (c, p) in fits
-        .iter_mut()
-        .filter(|c| c.failed.is_none())
-        .zip(tilth_tools::diagnose::holm_adjust(&raw))
-    {
-        c.p_needed = p;
-        c.needed = c.chi2_drop > 0.0 && p < args.alpha;
+    judge(&mut fits, args.alpha);
+    // A rival that only its unfinished fit keeps from exclusion is fitted on from where it
+    // stopped, once: the decision rests on it, so it is worth the runs.
+    for k in super::exclude::worth_finishing(&fits, args.alpha) {
+        let c = &fits[k];
+        say(&format!("{} on from where its fit stopped", c.name));
+        let param = super::exclude::restart_at(&c.param, c.strength);
+        let dir = Path::new(&c.dir).join("more");
+        let model = Path::new(&c.dir).join("model.toml");
+        match fit_into(args, (&model, &data), &dir, Some(&param)) {
+            Ok(f) if f.chi2 < c.chi2 => {
+                fits[k] = Contender::fitted(&c.name.clone(), param, &dir, f, free.chi2, args.alpha)
+            }
+            // No better: the first fit stands, with what it could still gain.
+            Ok(_) => {}
+            Err(e) => eprintln!("refitting {} on: {e:#}; its first fit stands", c.name),
+        }
     }
-    exclude_worse(&mut fits, args.alpha);
+    judge(&mut fits, args.alpha);
     let refits = Refits {
         free: NullFit {
             chi2: free.chi2,
@@ -456,6 +480,7 @@ mod tests {
             p_needed: if needed { 1e-4 } else { 0.5 },
             needed,
             within_noise: p_value >= 0.01,
+            unfinished_gain: 0.0,
             p_worse: None,
             excluded,
             z: vec![],
@@ -563,30 +588,6 @@ mod tests {
         // Nothing named: the verdict stands, and no failed fit is called an effect.
         let none = v(refits(70.0, vec![fit("a", 60.0, true, false), jammed()]));
         assert_eq!(none.verdict, Kind::NoneOfTheCandidates);
-    }
-
-    #[test]
-    fn a_rival_is_excluded_by_a_worse_fit_over_many_rows_not_by_one_row() {
-        let with_z = |name: &str, z: Vec<f64>| {
-            let mut c = fit(name, z.iter().map(|x| x * x).sum(), true, false);
-            c.z = z;
-            c
-        };
-        let best = with_z("best", vec![1.0; 16]);
-        let mut one_row = vec![1.0; 16];
-        one_row[0] = 17f64.sqrt();
-        let mut spread: Vec<f64> = vec![1.5; 16];
-        spread[3] = 1.4;
-        let mut fits = vec![with_z("one-row", one_row), best, with_z("spread", spread)];
-        exclude_worse(&mut fits, 0.01);
-        assert_eq!(fits[1].p_worse, None, "the best");
-        // One row: V = 1.03 (tools' nonnested tests), p 0.15 (Holm x2: 0.30).
-        assert!(
-            !fits[0].excluded && fits[0].p_worse.unwrap() > 0.1,
-            "{:?}",
-            fits[0].p_worse
-        );
-        assert!(fits[2].excluded, "{:?}", fits[2].p_worse);
     }
 
     #[test]

@@ -261,7 +261,7 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
     let p = |x: f64| p_text(x).trim_start_matches("= ").to_string();
     let mut md = format!(
         "Refitted on simulations (`tilth fit` in DIR/refit/; --no-refit skips it): the free parameters alone leave chi^2 {:.1} ({:.1} in normal scores) on {} degrees of freedom (p {}); each contender fitted with them:\n\n\
-         | contender | fitted strength | standard error | chi^2 (normal scores) | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise | p no worse than the best (Holm) | excluded |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         | contender | fitted strength | standard error | chi^2 (normal scores) | dof | p | chi^2 drop | p needed (Holm) | needed | within the noise | its fit could still gain | p of its gap if it were the truth (Holm) | excluded |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         r.free.chi2,
         r.free.chi2_scores,
         r.free.dof,
@@ -270,14 +270,14 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
     for c in &r.contenders {
         if let Some(why) = &c.failed {
             md += &format!(
-                "| {} | its fit failed, so it is not ruled out: {} |||||||||||\n",
+                "| {} | its fit failed, so it is not ruled out: {} ||||||||||||\n",
                 c.name,
                 why.replace('|', "/").replace('\n', " ")
             );
             continue;
         }
         md += &format!(
-            "| {} | {:.4} | {} | {:.1} ({:.1}) | {} | {} | {:.1} | {} | {} | {} | {} | {} |\n",
+            "| {} | {:.4} | {} | {:.1} ({:.1}) | {} | {} | {:.1} | {} | {} | {} | {:.1} | {} | {} |\n",
             c.name,
             c.strength,
             c.standard_error.map_or("-".into(), |s| format!("{s:.4}")),
@@ -289,12 +289,13 @@ fn refit_table(r: &Refits, alpha: f64) -> String {
             p(c.p_needed),
             if c.needed { "yes" } else { "no" },
             if c.within_noise { "yes" } else { "no" },
+            c.unfinished_gain,
             c.p_worse.map_or("-".into(), p),
             if c.excluded { "yes" } else { "no" }
         );
     }
     md + &format!(
-        "\nNeeded: the drop from the free parameters' fit against chi^2(1), Holm-corrected, under {alpha}; within the noise: p >= {alpha}, from the normal scores' chi^2, which allows for standard errors estimated from a few runs each (a row's z then has Student's t tails: `tilth_tools::compare::welch`). Excluded: its fit is worse than the best needed one's beyond doubt, row by row (Vuong's test, Holm-corrected, under {alpha}). The verdict below is the fits': the best needed contender, if within the noise, is named when every other needed one is excluded, and is ambiguous with those that are not; none is none of the candidates (or no effect when none is needed and the free parameters' fit is within the noise).\n\n"
+        "\nNeeded: the drop from the free parameters' fit against chi^2(1), Holm-corrected, under {alpha}; within the noise: p >= {alpha}, from the normal scores' chi^2, which allows for standard errors estimated from a few runs each (a row's z then has Student's t tails: `tilth_tools::compare::welch`). Excluded: were it the truth, a gap as large between its fit and the best needed one's (chi^2 in normal scores, less what its fit could still gain: the next step's predicted gain or, out of iterations, its last step's) would come with probability at most exp(-gap/2), Holm-corrected, under {alpha}; a rival kept only by an unfinished fit is fitted on once (DIR/refit/NAME/more/). The verdict below is the fits': the best needed contender, if within the noise, is named when every other needed one is excluded, and is ambiguous with those that are not; none is none of the candidates (or no effect when none is needed and the free parameters' fit is within the noise).\n\n"
     )
 }
 
