@@ -8,7 +8,7 @@ use super::rmse;
 use super::simulations::{Evaluated, Problem, Sims, at, residuals};
 use super::stop::{Stop, at_noise, noise_gain, predicted_gain};
 use crate::study::lab_runs::{Simulate, prefetch};
-use anyhow::{Result, anyhow};
+use anyhow::{Result, anyhow, bail};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -231,7 +231,9 @@ impl State {
 /// The Jacobian at the accepted setting `theta` of iteration `it`, standardised by its
 /// standard errors, J_ij = (mean_i(theta + h_j e_j) - centre_i) / h_j / se_i, and the noise
 /// it carries into J'J (`jacobian_noise.rs`). Parameter j moves by h_j = `JACOBIAN_STEP` of
-/// its range (backwards at its upper bound); the P moved settings are simulated in turn.
+/// its range (backwards at its upper bound); the P moved settings are simulated in turn. A
+/// moved setting whose runs fail (a funnel that jams with more adhesion) is run the other
+/// way instead, when that stays in range: a backward difference is as good a slope.
 fn jacobian(
     p: &Problem,
     it: usize,
@@ -241,7 +243,7 @@ fn jacobian(
     centre_seeds: &[Vec<f64>],
 ) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     let (rows, n) = (p.rows, p.params.len());
-    let steps: Vec<f64> = p
+    let mut steps: Vec<f64> = p
         .params
         .iter()
         .enumerate()
@@ -250,14 +252,13 @@ fn jacobian(
             if theta[j] + h0 <= p.high { h0 } else { -h0 }
         })
         .collect();
-    let moved_settings = steps
-        .iter()
-        .enumerate()
-        .map(|(j, h)| {
-            let mut t = theta.to_vec();
-            t[j] += h;
-            p.setting(it, &format!("param-{j}"), &t)
-        })
+    let moved = |j: usize, h: f64, name: &str| {
+        let mut t = theta.to_vec();
+        t[j] += h;
+        p.setting(it, name, &t)
+    };
+    let moved_settings = (0..n)
+        .map(|j| moved(j, steps[j], &format!("param-{j}")))
         .collect::<Result<Vec<_>>>()?;
     // With --slurm the P moved settings go into one job array.
     let hows: Vec<Simulate> = moved_settings
@@ -268,22 +269,27 @@ fn jacobian(
     let mut jac = DMatrix::zeros(rows.len(), n);
     let mut moved_seeds = Vec::with_capacity(n);
     for (j, param) in p.params.iter().enumerate() {
-        let h = steps[j];
         let (path, out) = &moved_settings[j];
-        let Sims {
-            mean: moved, seeds, ..
-        } = p.run_at(path, out)?;
-        moved_seeds.push(seeds);
-        for i in 0..rows.len() {
-            let m = moved[i].ok_or_else(|| {
-                anyhow!(
-                    "iteration {it}: the runs with {} moved failed at row {}",
-                    param.label,
-                    rows[i].row
-                )
-            })?;
-            jac[(i, j)] = (m - centre[i]) / h / se[i];
+        let mut sims = p.run_at(path, out)?;
+        let failed_row = |s: &Sims| s.mean.iter().position(|m| m.is_none());
+        if failed_row(&sims).is_some()
+            && (p.params[j].low..=p.params[j].high).contains(&(theta[j] - steps[j]))
+        {
+            steps[j] = -steps[j];
+            let (path, out) = moved(j, steps[j], &format!("param-{j}-back"))?;
+            sims = p.run_at(&path, &out)?;
         }
+        if let Some(i) = failed_row(&sims) {
+            bail!(
+                "iteration {it}: the runs with {} moved failed at row {}",
+                param.label,
+                rows[i].row
+            );
+        }
+        for i in 0..rows.len() {
+            jac[(i, j)] = (sims.mean[i].expect("checked above") - centre[i]) / steps[j] / se[i];
+        }
+        moved_seeds.push(sims.seeds);
     }
     let noise = jacobian_noise(centre_seeds, &moved_seeds, &steps, se);
     Ok((jac, noise))
