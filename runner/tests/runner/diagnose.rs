@@ -708,7 +708,7 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
         let excluded = f["p_worse"].as_f64().is_some_and(|p| p < 0.01);
         assert_eq!(f["excluded"].as_bool(), Some(excluded), "{name}");
         // What the fit could still gain, from its history: the last accepted step's
-        // predicted gain, or, out of iterations, the chi^2 that step removed if more.
+        // predicted gain, or, out of iterations on that step, the chi^2 it removed if more.
         let accepted: Vec<&serde_json::Value> = fit["history"]
             .as_array()
             .unwrap()
@@ -717,11 +717,15 @@ fn refit_fits_each_contender_and_the_verdict_follows_the_fits() {
             .collect();
         let last = accepted.last().unwrap();
         let mut gain = last["predicted_gain"].as_f64().unwrap_or(0.0);
-        if fit["stopped"] == "iterations" && accepted.len() > 1 {
+        let history = fit["history"].as_array().unwrap();
+        let moving = history.last().unwrap()["accepted"] == true;
+        if fit["stopped"] == "iterations" && moving && accepted.len() > 1 {
             let before = accepted[accepted.len() - 2]["chi2"].as_f64().unwrap();
             gain = gain.max(before - last["chi2"].as_f64().unwrap());
         }
         assert_eq!(f["unfinished_gain"].as_f64(), Some(gain.max(0.0)), "{name}");
+        let moving = moving && fit["stopped"] == "iterations" && accepted.len() > 1;
+        assert_eq!(f["still_moving"].as_bool(), Some(moving), "{name}");
         if needed {
             gaps.push((fit["chi2_scores"].as_f64().unwrap(), gain.max(0.0), f));
             chosen.push((chi2, name.to_string(), fit["estimate"][1].as_f64().unwrap()));

@@ -1,4 +1,4 @@
-//! Which needed contenders the best one's fit excludes.
+//! Which contenders are needed, and which of those the best one's fit excludes.
 //!
 //! A rival b is excluded beside the best needed contender a (least chi^2) when the gap
 //! between their fits, G = chi^2_b - chi^2_a in normal scores less what b's fit could still
@@ -14,15 +14,19 @@
 //! ([`worth_finishing`]).
 
 use super::refit::Contender;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
 use tilth_tools::diagnose::nonnested::gap_p;
 
-/// What a fit (its `fit.json`) could still gain: the predicted chi^2 gain of the
-/// Gauss-Newton step at its best setting (`tilth fit`'s stop rule), and, when it stopped
-/// for want of iterations, the chi^2 its last accepted step removed, if more (a step from
-/// there, on the same slope, may gain as much again: the linear prediction understates a
-/// curved response). 0 when the history says nothing.
-pub fn unfinished_gain(fit: &serde_json::Value) -> f64 {
-    let accepted: Vec<(f64, f64)> = (fit["history"].as_array().into_iter().flatten())
+/// What a fit (its `fit.json`) could still gain, and whether it was still moving: the
+/// predicted chi^2 gain of the Gauss-Newton step at its best setting (`tilth fit`'s stop
+/// rule) and, when it ran out of iterations on an accepted step (still moving, no step
+/// from there tried), the chi^2 that step removed, if more: a step on the same slope may
+/// gain as much again, and the linear prediction understates a curved response. A fit
+/// whose steps from its best were all refused keeps only the prediction. 0 when the history
+/// says nothing.
+pub fn unfinished_gain(fit: &serde_json::Value) -> (f64, bool) {
+    let steps: Vec<&serde_json::Value> = fit["history"].as_array().into_iter().flatten().collect();
+    let accepted: Vec<(f64, f64)> = (steps.iter())
         .filter(|s| s["accepted"] == true)
         .filter_map(|s| {
             Some((
@@ -32,13 +36,40 @@ pub fn unfinished_gain(fit: &serde_json::Value) -> f64 {
         })
         .collect();
     let Some(&(best, predicted)) = accepted.last() else {
-        return 0.0;
+        return (0.0, false);
     };
-    let last_step = match accepted.len() {
-        n if n >= 2 && fit["stopped"] == "iterations" => accepted[n - 2].0 - best,
-        _ => 0.0,
+    let moving = fit["stopped"] == "iterations"
+        && accepted.len() >= 2
+        && steps.last().is_some_and(|s| s["accepted"] == true);
+    let last_step = if moving {
+        accepted[accepted.len() - 2].0 - best
+    } else {
+        0.0
     };
-    predicted.max(last_step).max(0.0)
+    (predicted.max(last_step).max(0.0), moving)
+}
+
+/// Needed (the chi^2 drop against chi^2(1), Holm over the contenders whose fits were made),
+/// then excluded beside the best ([`super::exclude::exclude_worse`]).
+pub(super) fn judge(fits: &mut [Contender], alpha: f64) {
+    let raw: Vec<f64> = fits
+        .iter()
+        .filter(|c| c.failed.is_none())
+        .map(|c| {
+            ChiSquared::new(1.0)
+                .expect("one degree")
+                .sf(c.chi2_drop.max(0.0))
+        })
+        .collect();
+    for (c, p) in fits
+        .iter_mut()
+        .filter(|c| c.failed.is_none())
+        .zip(tilth_tools::diagnose::holm_adjust(&raw))
+    {
+        c.p_needed = p;
+        c.needed = c.chi2_drop > 0.0 && p < alpha;
+    }
+    exclude_worse(fits, alpha);
 }
 
 /// The best needed contender's index: the least chi^2.
@@ -77,14 +108,15 @@ pub(super) fn exclude_worse(fits: &mut [Contender], alpha: f64) {
 
 /// The needed rivals, not excluded, that would be if their fits were finished: their gap
 /// without the unfinished gain passes the test Holm gives the largest p (alpha itself),
-/// with the gain it does not.
+/// with the gain it does not, and the fit was still moving (a fit whose steps from its best
+/// were refused would take the same steps again).
 pub(super) fn worth_finishing(fits: &[Contender], alpha: f64) -> Vec<usize> {
     let Some(best) = best_needed(fits) else {
         return vec![];
     };
     (0..fits.len())
         .filter(|&k| k != best && fits[k].needed && !fits[k].excluded)
-        .filter(|&k| fits[k].unfinished_gain > 0.0)
+        .filter(|&k| fits[k].unfinished_gain > 0.0 && fits[k].still_moving)
         .filter(|&k| gap_p(gap(&fits[best], &fits[k], 0.0)) < alpha)
         .collect()
 }
@@ -112,6 +144,7 @@ mod tests {
         );
         (c.chi2, c.chi2_scores, c.dof, c.failed) = (chi2, chi2, 16.0, None);
         (c.needed, c.within_noise, c.unfinished_gain) = (true, true, gain);
+        c.still_moving = gain > 0.0;
         c
     }
 
@@ -132,13 +165,14 @@ mod tests {
         assert!((fits[2].p_worse.unwrap() - 3.0 * (-7f64).exp()).abs() < 1e-12);
         assert!(fits[2].excluded && fits[3].excluded);
         // The same gap, but the fit stopped with 8 still to gain: 14 - 8 = 6 is not beyond.
-        fits[2].unfinished_gain = 8.0;
+        (fits[2].unfinished_gain, fits[2].still_moving) = (8.0, true);
+        (fits[3].unfinished_gain, fits[3].still_moving) = (8.0, false);
         exclude_worse(&mut fits, 0.01);
         assert!(!fits[2].excluded, "{:?}", fits[2].p_worse);
         assert_eq!(
             worth_finishing(&fits, 0.01),
             [2],
-            "only the unfinished one is worth it"
+            "only the one still moving is worth it, not the one whose steps were refused"
         );
         // One decisive row excludes as well as the same chi^2 spread over every row: the
         // rows' noise is known.
@@ -157,14 +191,22 @@ mod tests {
             {"accepted": true, "chi2": 42.0},
         ]);
         // Out of iterations after a step that removed 46: 46, not the 0 it never predicted.
-        assert_eq!(unfinished_gain(&j("iterations", steps.clone())), 46.0);
-        let at_noise = serde_json::json!([
+        assert_eq!(
+            unfinished_gain(&j("iterations", steps.clone())),
+            (46.0, true)
+        );
+        let refused = serde_json::json!([
             {"accepted": true, "chi2": 30.0, "predicted_gain": 12.0},
             {"accepted": true, "chi2": 14.0, "predicted_gain": 1.5},
+            {"accepted": false, "chi2": 19.0},
         ]);
-        assert_eq!(unfinished_gain(&j("at_noise", at_noise.clone())), 1.5);
-        assert_eq!(unfinished_gain(&j("iterations", at_noise)), 16.0);
-        assert_eq!(unfinished_gain(&serde_json::json!({})), 0.0);
+        // Its step from the best refused: the prediction alone, out of iterations or not.
+        assert_eq!(
+            unfinished_gain(&j("iterations", refused.clone())),
+            (1.5, false)
+        );
+        assert_eq!(unfinished_gain(&j("at_noise", refused)), (1.5, false));
+        assert_eq!(unfinished_gain(&serde_json::json!({})), (0.0, false));
         assert_eq!(
             restart_at("candidate.fines=0:0.3@0.1", 0.17),
             "candidate.fines=0:0.3@0.17"

@@ -63,6 +63,8 @@ pub struct Contender {
     /// setting or, when it stopped for want of iterations, its last step's gain if larger
     /// ([`super::exclude::unfinished_gain`]).
     pub unfinished_gain: f64,
+    /// Its fit ran out of iterations on an accepted step: fitting on may lower its chi^2.
+    pub still_moving: bool,
     /// Against the best needed contender: the bound on the chance of a gap as large if it
     /// were the truth ([`tilth_tools::diagnose::nonnested::gap_p`]), Holm-corrected over the
     /// others (None for the best itself or one not needed).
@@ -115,6 +117,7 @@ impl Contender {
             needed: false,
             within_noise: false,
             unfinished_gain: 0.0,
+            still_moving: false,
             p_worse: None,
             excluded: false,
             z: vec![],
@@ -148,7 +151,8 @@ impl Contender {
             p_needed: f64::NAN,
             needed: false,
             within_noise: p_value >= alpha,
-            unfinished_gain: f.unfinished_gain,
+            unfinished_gain: f.unfinished_gain.0,
+            still_moving: f.unfinished_gain.1,
             p_worse: None,
             excluded: false,
             z: f.z,
@@ -156,25 +160,6 @@ impl Contender {
             failed: None,
         }
     }
-}
-
-/// Needed (the chi^2 drop against chi^2(1), Holm over the contenders whose fits were made),
-/// then excluded beside the best ([`super::exclude::exclude_worse`]).
-fn judge(fits: &mut [Contender], alpha: f64) {
-    let raw: Vec<f64> = fits
-        .iter()
-        .filter(|c| c.failed.is_none())
-        .map(|c| chi2_sf(c.chi2_drop.max(0.0), 1.0))
-        .collect();
-    for (c, p) in fits
-        .iter_mut()
-        .filter(|c| c.failed.is_none())
-        .zip(tilth_tools::diagnose::holm_adjust(&raw))
-    {
-        c.p_needed = p;
-        c.needed = c.chi2_drop > 0.0 && p < alpha;
-    }
-    super::exclude::exclude_worse(fits, alpha);
 }
 
 /// The contenders of a linear diagnosis, best first.
@@ -228,7 +213,7 @@ pub(super) struct Fitted {
     estimate: f64,
     standard_error: Option<f64>,
     z: Vec<f64>,
-    unfinished_gain: f64,
+    unfinished_gain: (f64, bool),
 }
 
 fn read_fit(dir: &Path) -> Result<Fitted> {
@@ -419,7 +404,7 @@ pub(super) fn refit(
             args.alpha,
         ));
     }
-    judge(&mut fits, args.alpha);
+    super::exclude::judge(&mut fits, args.alpha);
     // A rival that only its unfinished fit keeps from exclusion is fitted on from where it
     // stopped, once: the decision rests on it, so it is worth the runs.
     for k in super::exclude::worth_finishing(&fits, args.alpha) {
@@ -437,7 +422,7 @@ pub(super) fn refit(
             Err(e) => eprintln!("refitting {} on: {e:#}; its first fit stands", c.name),
         }
     }
-    judge(&mut fits, args.alpha);
+    super::exclude::judge(&mut fits, args.alpha);
     let refits = Refits {
         free: NullFit {
             chi2: free.chi2,
@@ -481,6 +466,7 @@ mod tests {
             needed,
             within_noise: p_value >= 0.01,
             unfinished_gain: 0.0,
+            still_moving: false,
             p_worse: None,
             excluded,
             z: vec![],

@@ -233,7 +233,8 @@ impl State {
 /// it carries into J'J (`jacobian_noise.rs`). Parameter j moves by h_j = `JACOBIAN_STEP` of
 /// its range (backwards at its upper bound); the P moved settings are simulated in turn. A
 /// moved setting whose runs fail (a funnel that jams with more adhesion) is run the other
-/// way instead, when that stays in range: a backward difference is as good a slope.
+/// way instead, then half as far either way, while in range: a backward or shorter
+/// difference is as good a slope, if noisier.
 fn jacobian(
     p: &Problem,
     it: usize,
@@ -272,12 +273,18 @@ fn jacobian(
         let (path, out) = &moved_settings[j];
         let mut sims = p.run_at(path, out)?;
         let failed_row = |s: &Sims| s.mean.iter().position(|m| m.is_none());
-        if failed_row(&sims).is_some()
-            && (p.params[j].low..=p.params[j].high).contains(&(theta[j] - steps[j]))
-        {
-            steps[j] = -steps[j];
-            let (path, out) = moved(j, steps[j], &format!("param-{j}-back"))?;
-            sims = p.run_at(&path, &out)?;
+        // Failed runs: the other way, then half as far either way, while in range.
+        let h = steps[j];
+        let (low, high) = (p.params[j].low, p.params[j].high);
+        for (k, retry) in [-h, 0.5 * h, -0.5 * h].into_iter().enumerate() {
+            if failed_row(&sims).is_none() {
+                break;
+            }
+            if (low..=high).contains(&(theta[j] + retry)) {
+                steps[j] = retry;
+                let (path, out) = moved(j, retry, &format!("param-{j}-retry-{k}"))?;
+                sims = p.run_at(&path, &out)?;
+            }
         }
         if let Some(i) = failed_row(&sims) {
             bail!(
