@@ -121,13 +121,21 @@ pub(super) fn worth_finishing(fits: &[Contender], alpha: f64) -> Vec<usize> {
         .collect()
 }
 
-/// A contender's `--param` started at its fitted strength: a candidate's `@start` replaced;
-/// a held parameter starts at the fitted model's value already.
+/// A contender's `--param` for fitting on from its fitted model, which has its strength in
+/// already: a candidate's `--param` adds to the model's strength, so its range is shifted by
+/// the fitted strength and it starts at 0; a held parameter is an offset from the model's
+/// value within absolute bounds, so it stays. The fit's estimate is then added to
+/// `strength`.
 pub(super) fn restart_at(param: &str, strength: f64) -> String {
-    match param.split_once('@') {
-        Some((range, _)) if strength.is_finite() => format!("{range}@{strength}"),
-        _ => param.to_string(),
-    }
+    let shifted = param
+        .split_once('=')
+        .filter(|(key, _)| key.starts_with("candidate.") && strength.is_finite())
+        .and_then(|(key, range)| {
+            let (lo, hi) = range.split('@').next()?.split_once(':')?;
+            let (lo, hi) = (lo.parse::<f64>().ok()?, hi.parse::<f64>().ok()?);
+            Some(format!("{key}={}:{}@0", lo - strength, hi - strength))
+        });
+    shifted.unwrap_or_else(|| param.to_string())
 }
 
 #[cfg(test)]
@@ -208,8 +216,8 @@ mod tests {
         assert_eq!(unfinished_gain(&j("at_noise", refused)), (1.5, false));
         assert_eq!(unfinished_gain(&serde_json::json!({})), (0.0, false));
         assert_eq!(
-            restart_at("candidate.fines=0:0.3@0.1", 0.17),
-            "candidate.fines=0:0.3@0.17"
+            restart_at("candidate.fines=0:0.5@0.1", 0.25),
+            "candidate.fines=-0.25:0.25@0"
         );
         assert_eq!(
             restart_at("soil-soil.restitution=0.3:0.8", 0.1),

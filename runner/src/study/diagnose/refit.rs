@@ -415,7 +415,10 @@ pub(super) fn refit(
         let model = Path::new(&c.dir).join("model.toml");
         match fit_into(args, (&model, &data), &dir, Some(&param)) {
             Ok(f) if f.chi2 < c.chi2 => {
-                fits[k] = Contender::fitted(&c.name.clone(), param, &dir, f, free.chi2, args.alpha)
+                // Its estimate adds to the strength the fitted model has in already.
+                let strength = c.strength + f.estimate;
+                fits[k] = Contender::fitted(&c.name.clone(), param, &dir, f, free.chi2, args.alpha);
+                fits[k].strength = strength;
             }
             // No better: the first fit stands, with what it could still gain.
             Ok(_) => {}
