@@ -414,13 +414,13 @@ pub(super) fn refit(
         let dir = Path::new(&c.dir).join("more");
         let model = Path::new(&c.dir).join("model.toml");
         match fit_into(args, (&model, &data), &dir, Some(&param)) {
-            Ok(f) if f.chi2 < c.chi2 => {
+            // It starts at the same setting, so it is no worse; equal, it says the fit is done.
+            Ok(f) if f.chi2 <= c.chi2 => {
                 // Its estimate adds to the strength the fitted model has in already.
                 let strength = c.strength + f.estimate;
                 fits[k] = Contender::fitted(&c.name.clone(), param, &dir, f, free.chi2, args.alpha);
                 fits[k].strength = strength;
             }
-            // No better: the first fit stands, with what it could still gain.
             Ok(_) => {}
             Err(e) => eprintln!("refitting {} on: {e:#}; its first fit stands", c.name),
         }
