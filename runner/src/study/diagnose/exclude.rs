@@ -13,8 +13,7 @@
 //! only this keeps from exclusion is fitted on once from where it stopped
 //! ([`worth_finishing`]).
 
-use super::refit::Contender;
-use statrs::distribution::{ChiSquared, ContinuousCDF};
+use super::refit::{Contender, chi2_sf};
 use tilth_tools::diagnose::nonnested::gap_p;
 
 /// What a fit (its `fit.json`) could still gain, and whether it was still moving: the
@@ -24,7 +23,7 @@ use tilth_tools::diagnose::nonnested::gap_p;
 /// gain as much again, and the linear prediction understates a curved response. A fit
 /// whose steps from its best were all refused keeps only the prediction. 0 when the history
 /// says nothing.
-pub fn unfinished_gain(fit: &serde_json::Value) -> (f64, bool) {
+pub(super) fn unfinished_gain(fit: &serde_json::Value) -> (f64, bool) {
     let steps: Vec<&serde_json::Value> = fit["history"].as_array().into_iter().flatten().collect();
     let accepted: Vec<(f64, f64)> = (steps.iter())
         .filter(|s| s["accepted"] == true)
@@ -50,16 +49,12 @@ pub fn unfinished_gain(fit: &serde_json::Value) -> (f64, bool) {
 }
 
 /// Needed (the chi^2 drop against chi^2(1), Holm over the contenders whose fits were made),
-/// then excluded beside the best ([`super::exclude::exclude_worse`]).
+/// then excluded beside the best ([`exclude_worse`]).
 pub(super) fn judge(fits: &mut [Contender], alpha: f64) {
     let raw: Vec<f64> = fits
         .iter()
         .filter(|c| c.failed.is_none())
-        .map(|c| {
-            ChiSquared::new(1.0)
-                .expect("one degree")
-                .sf(c.chi2_drop.max(0.0))
-        })
+        .map(|c| chi2_sf(c.chi2_drop.max(0.0), 1.0))
         .collect();
     for (c, p) in fits
         .iter_mut()
@@ -85,7 +80,7 @@ fn gap(best: &Contender, rival: &Contender, slack: f64) -> f64 {
 }
 
 /// Sets `p_worse` and `excluded` on each needed contender beside the best needed one.
-pub(super) fn exclude_worse(fits: &mut [Contender], alpha: f64) {
+fn exclude_worse(fits: &mut [Contender], alpha: f64) {
     for c in fits.iter_mut() {
         c.p_worse = None;
         c.excluded = false;

@@ -60,8 +60,8 @@ pub struct Contender {
     pub needed: bool,
     pub within_noise: bool,
     /// What its fit could still gain: the predicted chi^2 gain of the next step at its best
-    /// setting or, when it stopped for want of iterations, its last step's gain if larger
-    /// ([`super::exclude::unfinished_gain`]).
+    /// setting or, when it ran out of iterations on an accepted step, that step's gain if
+    /// larger ([`super::exclude::unfinished_gain`]).
     pub unfinished_gain: f64,
     /// Its fit ran out of iterations on an accepted step: fitting on may lower its chi^2.
     pub still_moving: bool,
@@ -125,9 +125,7 @@ impl Contender {
             failed: Some(why),
         }
     }
-}
 
-impl Contender {
     /// A contender fitted into `dir` (`f`), beside the free parameters' chi^2.
     fn fitted(
         name: &str,
@@ -200,16 +198,16 @@ fn contender_param(d: &Diagnosed, step: f64, held_values: &[f64]) -> String {
     }
 }
 
-fn chi2_sf(x: f64, dof: f64) -> f64 {
+pub(super) fn chi2_sf(x: f64, dof: f64) -> f64 {
     ChiSquared::new(dof.max(1.0)).map_or(f64::NAN, |d| d.sf(x))
 }
 
 /// What one fit left: chi^2 (and its normal scores' sum, the misfit test's), dof, the
 /// last parameter's estimate and standard error, and what it could still gain.
-pub(super) struct Fitted {
-    pub(super) chi2: f64,
-    pub(super) chi2_scores: f64,
-    pub(super) dof: f64,
+struct Fitted {
+    chi2: f64,
+    chi2_scores: f64,
+    dof: f64,
     estimate: f64,
     standard_error: Option<f64>,
     z: Vec<f64>,
@@ -408,21 +406,21 @@ pub(super) fn refit(
     // A rival that only its unfinished fit keeps from exclusion is fitted on from where it
     // stopped, once: the decision rests on it, so it is worth the runs.
     for k in super::exclude::worth_finishing(&fits, args.alpha) {
-        let c = &fits[k];
-        say(&format!("{} on from where its fit stopped", c.name));
-        let param = super::exclude::restart_at(&c.param, c.strength);
-        let dir = Path::new(&c.dir).join("more");
-        let model = Path::new(&c.dir).join("model.toml");
+        let (name, first) = (fits[k].name.clone(), &fits[k]);
+        say(&format!("{name} on from where its fit stopped"));
+        let param = super::exclude::restart_at(&first.param, first.strength);
+        let dir = Path::new(&first.dir).join("more");
+        let model = Path::new(&first.dir).join("model.toml");
         match fit_into(args, (&model, &data), &dir, Some(&param)) {
             // It starts at the same setting, so it is no worse; equal, it says the fit is done.
-            Ok(f) if f.chi2 <= c.chi2 => {
+            Ok(f) if f.chi2 <= first.chi2 => {
                 // Its estimate adds to the strength the fitted model has in already.
-                let strength = c.strength + f.estimate;
-                fits[k] = Contender::fitted(&c.name.clone(), param, &dir, f, free.chi2, args.alpha);
+                let strength = first.strength + f.estimate;
+                fits[k] = Contender::fitted(&name, param, &dir, f, free.chi2, args.alpha);
                 fits[k].strength = strength;
             }
             Ok(_) => {}
-            Err(e) => eprintln!("refitting {} on: {e:#}; its first fit stands", c.name),
+            Err(e) => eprintln!("refitting {name} on: {e:#}; its first fit stands"),
         }
     }
     super::exclude::judge(&mut fits, args.alpha);
